@@ -1,0 +1,184 @@
+// The depth-query backend interface: exactly what Cullide asks of a GPU, and nothing more.
+//
+// A backend owns a depth buffer (no colour) and occlusion-query counters. Per frame it receives
+// the geometry once (positions + triangles); per reducePCS pass it receives a view and executes
+// a command list, returning every query's result. Two implementations stand behind it: the
+// deterministic CPU reference (raster/) and OpenGL (raster/gl/).
+//
+// Conventions
+//   - View space: an orthonormal frame (right, up, dir). A world point p has view coordinates
+//     x = right.p, y = up.p, z = dir.p; the camera looks along +dir, so depth grows along dir
+//     ("near" is the smallest z).
+//   - The view box [xmin,xmax] x [ymin,ymax] x [znear,zfar] maps to GL window coordinates:
+//       xw = (x - xmin) / (xmax - xmin) * width,   yw = (y - ymin) / (ymax - ymin) * height,
+//       zw = (z - znear) / (zfar - znear)          (glDepthRange(0, 1); y up, origin bottom-left)
+//     OrthoView::toWindow() is that map, evaluated in double from float positions; every backend
+//     uses it (or reproduces it) so both see the same window coordinates.
+//   - Depth functions and queries have GL's meaning (GL 4.6 §17.3.4, §17.3.5). A fragment passes
+//     when `incoming FUNC stored` holds, compared on the stored representation of the format.
+//   - State persists across execute() calls, as in GL: depth buffer contents, depth function
+//     (initially LESS), depth mask (initially true). Changing the viewport size makes the depth
+//     contents undefined until the next clear.
+#pragma once
+
+#include "cullide/mesh.h"
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace cullide {
+
+// The eight GL depth functions, in GL's enum order (GL_NEVER + k).
+enum class DepthFunc : uint8_t { Never, Less, Equal, LEqual, Greater, NotEqual, GEqual, Always };
+
+const char* toString(DepthFunc f);
+
+// Whether `incoming FUNC stored` holds; T is the stored representation (uint32_t or float).
+template <typename T>
+constexpr bool depthTest(DepthFunc f, T incoming, T stored) {
+    switch (f) {
+        case DepthFunc::Never: return false;
+        case DepthFunc::Less: return incoming < stored;
+        case DepthFunc::Equal: return incoming == stored;
+        case DepthFunc::LEqual: return incoming <= stored;
+        case DepthFunc::Greater: return incoming > stored;
+        case DepthFunc::NotEqual: return incoming != stored;
+        case DepthFunc::GEqual: return incoming >= stored;
+        case DepthFunc::Always: return true;
+    }
+    return false;
+}
+
+enum class QueryKind : uint8_t {
+    SamplesPassed,     // number of fragments that passed the depth test
+    AnySamplesPassed,  // 1 if any fragment passed, else 0
+};
+
+// How depth is stored: unsigned normalized with n bits (8..32), k = round(z * (2^n - 1)) after
+// clamping z to [0,1]; or IEEE 32-bit float (z clamped to [0,1], stored as float).
+struct DepthFormat {
+    enum class Kind : uint8_t { Unorm, Float32 };
+    Kind kind = Kind::Unorm;
+    int bits = 24;
+
+    static DepthFormat unorm(int n);  // throws InputError("depth format", ...) unless 8 <= n <= 32
+    static DepthFormat float32() { return {Kind::Float32, 32}; }
+    // Parses "24", "d24", "unorm24", "float", "f32", "d32f" (case-insensitive); throws InputError.
+    static DepthFormat parse(const std::string& text);
+
+    std::string name() const;  // "D24", "D32F"
+    // Size of one unit in the last place over [0,1]: 1/(2^n - 1) for unorm; 2^-24 (ulp at 1) for float.
+    double resolution() const;
+    friend bool operator==(const DepthFormat&, const DepthFormat&) = default;
+};
+
+// An orthographic view: frame, box, viewport and depth format.
+struct OrthoView {
+    Vec3d right{1, 0, 0}, up{0, 1, 0}, dir{0, 0, 1};  // orthonormal, right-handed
+    double xmin = -1, xmax = 1, ymin = -1, ymax = 1, znear = -1, zfar = 1;
+    int width = 500, height = 500;
+    DepthFormat depth;
+
+    // Window coordinates (xw, yw, zw) of a world point, in double (see the conventions above).
+    Vec3d toWindow(const Vec3f& p) const;
+    // A frame whose `dir` is the given direction (normalized), with right/up chosen
+    // deterministically (right = normalize(cross(helper, dir)) with helper the world axis least
+    // aligned with dir; up = cross(dir, right)).
+    static OrthoView looking(const Vec3d& direction);
+    // Throws InputError("view", ...) on a non-orthonormal frame, an empty box, a viewport outside
+    // 1..16384 per side, or non-finite numbers.
+    void validate() const;
+};
+
+// One recorded command. Use CommandList's methods to build them.
+struct Command {
+    enum class Op : uint8_t { Clear, SetDepthFunc, SetDepthMask, BeginQuery, EndQuery, Draw };
+    Op op;
+    DepthFunc func = DepthFunc::Less;          // SetDepthFunc
+    QueryKind queryKind = QueryKind::SamplesPassed;  // BeginQuery
+    bool mask = true;                          // SetDepthMask
+    double clearDepth = 1.0;                   // Clear: window-space depth in [0,1]
+    uint32_t first = 0, count = 0;             // Draw: triangles [first, first+count)
+};
+
+// A command list: what one reducePCS pass (or any depth-only workload) asks a backend to do.
+// Queries may not nest (GL allows one active query per target); results are numbered in the
+// order of beginQuery() calls.
+class CommandList {
+public:
+    void clear(double depth = 1.0);
+    void depthFunc(DepthFunc f);
+    void depthMask(bool write);
+    uint32_t beginQuery(QueryKind kind = QueryKind::SamplesPassed);  // returns the query's index
+    void endQuery();
+    void draw(uint32_t first, uint32_t count);
+
+    const std::vector<Command>& commands() const { return commands_; }
+    uint32_t queryCount() const { return queries_; }
+    size_t drawCount() const { return draws_; }
+    void reset();
+
+private:
+    std::vector<Command> commands_;
+    uint32_t queries_ = 0;
+    size_t draws_ = 0;
+    bool inQuery_ = false;
+};
+
+// The stored depth buffer, for tests and debug pictures. Row 0 is the bottom row (GL window
+// coordinates). For unorm formats `values` holds k; for float it holds the float's bit pattern.
+struct DepthImage {
+    int width = 0, height = 0;
+    DepthFormat format;
+    std::vector<uint32_t> values;
+
+    uint32_t at(int x, int y) const { return values[size_t(y) * size_t(width) + size_t(x)]; }
+    double depth(int x, int y) const;  // as a window depth in [0,1]
+};
+
+class DepthBackend {
+public:
+    virtual ~DepthBackend() = default;
+
+    // A short description of the implementation ("cpu reference (8 subpixel bits, 4 threads)",
+    // "gl: llvmpipe (LLVM 15.0.7, 256 bits), 4.5 core").
+    virtual std::string describe() const = 0;
+
+    // Geometry for the frame: the backend copies what it needs; the spans may die afterwards.
+    // Indices must be < positions.size() (validated meshes guarantee it).
+    virtual void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) = 0;
+
+    // The view for the following execute() calls (validated; throws InputError on a bad view).
+    virtual void setView(const OrthoView& view) = 0;
+
+    // Executes the commands in order and returns one result per query (index = query number).
+    // Draw ranges must lie inside the current geometry; a query left open is an error.
+    virtual std::vector<uint64_t> execute(const CommandList& commands) = 0;
+
+    // The current depth buffer.
+    virtual DepthImage readDepth() = 0;
+};
+
+// Immediate mode over any backend: each call executes at once (one-command lists), for tests
+// and exploration. endQuery() returns the query's result.
+class ImmediateContext {
+public:
+    explicit ImmediateContext(DepthBackend& backend) : backend_(backend) {}
+    void clear(double depth = 1.0);
+    void depthFunc(DepthFunc f);
+    void depthMask(bool write);
+    void beginQuery(QueryKind kind = QueryKind::SamplesPassed);
+    void draw(uint32_t first, uint32_t count);
+    uint64_t endQuery();
+
+private:
+    void run();
+    DepthBackend& backend_;
+    CommandList list_;
+    bool inQuery_ = false;
+};
+
+}  // namespace cullide

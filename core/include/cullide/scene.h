@@ -1,0 +1,68 @@
+// Scene model: named objects (each a mesh) and animations of them.
+//
+// Conventions
+//   - An Object's mesh is in its own (model) space; `transform` places it in the world. A
+//     transform is an affine map (rotation, uniform or non-uniform scale, translation) kept in
+//     float, like the positions it is applied to.
+//   - Scene::worldMesh(i) applies object i's transform in float, in one fixed order of operations,
+//     so every backend and the oracle see bit-identical world coordinates.
+//   - An Animation is a base scene plus frames. A frame may give, per object, a rigid/affine
+//     transform (moving objects) and/or a full set of vertex positions in model space (deforming
+//     objects); anything a frame leaves out stays as in the base scene. Topology (the triangle
+//     list) never changes between frames.
+#pragma once
+
+#include "cullide/mesh.h"
+
+#include <Eigen/Geometry>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cullide {
+
+using Transform = Eigen::Affine3f;
+
+// p' = T p, evaluated as M.col(0)*x + M.col(1)*y + M.col(2)*z + t in float, in that order.
+Vec3f applyTransform(const Transform& t, const Vec3f& p);
+
+struct Object {
+    std::string name;
+    Mesh mesh;
+    Transform transform = Transform::Identity();
+};
+
+struct Scene {
+    std::vector<Object> objects;
+
+    size_t triangleCount() const;
+    size_t vertexCount() const;
+    // Object i's mesh with its transform applied (same triangles, world positions).
+    Mesh worldMesh(size_t i) const;
+};
+
+// What one frame of an animation changes for one object.
+struct ObjectPose {
+    std::optional<Transform> transform;          // replaces the object's transform
+    std::optional<std::vector<Vec3f>> positions; // replaces its model-space positions (same count)
+};
+
+struct Frame {
+    std::vector<ObjectPose> poses;  // empty, or one per object of the base scene
+};
+
+struct Animation {
+    Scene scene;                // the base scene (frame-independent data: names, triangles)
+    std::vector<Frame> frames;  // may be empty: a still scene
+
+    size_t frameCount() const { return frames.empty() ? 1 : frames.size(); }
+    // The scene as it is at frame f (f < frameCount()).
+    Scene sceneAt(size_t f) const;
+};
+
+// Throws InputError(source, ...) when a frame does not fit the base scene (wrong number of
+// poses, wrong number of positions, non-finite positions or transforms).
+void validateAnimation(const Animation& animation, const std::string& source);
+
+}  // namespace cullide

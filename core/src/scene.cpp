@@ -1,0 +1,82 @@
+#include "cullide/scene.h"
+
+#include "cullide/error.h"
+
+#include <cmath>
+
+namespace cullide {
+
+Vec3f applyTransform(const Transform& t, const Vec3f& p) {
+    const auto& m = t.matrix();
+    Vec3f r;
+    for (int row = 0; row < 3; ++row)
+        r[row] = ((m(row, 0) * p.x() + m(row, 1) * p.y()) + m(row, 2) * p.z()) + m(row, 3);
+    return r;
+}
+
+size_t Scene::triangleCount() const {
+    size_t n = 0;
+    for (const Object& o : objects) n += o.mesh.triangleCount();
+    return n;
+}
+
+size_t Scene::vertexCount() const {
+    size_t n = 0;
+    for (const Object& o : objects) n += o.mesh.vertexCount();
+    return n;
+}
+
+Mesh Scene::worldMesh(size_t i) const {
+    const Object& o = objects.at(i);
+    Mesh m;
+    m.triangles = o.mesh.triangles;
+    m.positions.reserve(o.mesh.positions.size());
+    for (const Vec3f& p : o.mesh.positions) m.positions.push_back(applyTransform(o.transform, p));
+    return m;
+}
+
+Scene Animation::sceneAt(size_t f) const {
+    CULLIDE_CHECK(f < frameCount(), "frame index out of range");
+    Scene s = scene;
+    if (frames.empty()) return s;
+    const Frame& fr = frames[f];
+    for (size_t i = 0; i < fr.poses.size() && i < s.objects.size(); ++i) {
+        if (fr.poses[i].transform) s.objects[i].transform = *fr.poses[i].transform;
+        if (fr.poses[i].positions) s.objects[i].mesh.positions = *fr.poses[i].positions;
+    }
+    return s;
+}
+
+static bool finite(const Transform& t) { return t.matrix().allFinite(); }
+
+void validateAnimation(const Animation& a, const std::string& source) {
+    for (size_t i = 0; i < a.scene.objects.size(); ++i) {
+        if (!finite(a.scene.objects[i].transform))
+            throw InputError(source, "object '" + a.scene.objects[i].name + "' has a non-finite transform");
+    }
+    for (size_t f = 0; f < a.frames.size(); ++f) {
+        const Frame& fr = a.frames[f];
+        const std::string where = "frame " + std::to_string(f);
+        if (!fr.poses.empty() && fr.poses.size() != a.scene.objects.size())
+            throw InputError(source, where + " has " + std::to_string(fr.poses.size()) + " object poses, but the scene has " +
+                                         std::to_string(a.scene.objects.size()) + " objects");
+        for (size_t i = 0; i < fr.poses.size(); ++i) {
+            const ObjectPose& p = fr.poses[i];
+            const Object& o = a.scene.objects[i];
+            if (p.transform && !finite(*p.transform))
+                throw InputError(source, where + ", object '" + o.name + "': non-finite transform");
+            if (p.positions) {
+                if (p.positions->size() != o.mesh.positions.size())
+                    throw InputError(source, where + ", object '" + o.name + "': " + std::to_string(p.positions->size()) +
+                                                 " positions, but the mesh has " + std::to_string(o.mesh.positions.size()) +
+                                                 " vertices");
+                for (size_t v = 0; v < p.positions->size(); ++v)
+                    if (!(*p.positions)[v].allFinite())
+                        throw InputError(source, where + ", object '" + o.name + "': vertex " + std::to_string(v) +
+                                                     " is not finite (NaN or Inf)");
+            }
+        }
+    }
+}
+
+}  // namespace cullide

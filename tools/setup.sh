@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Installs every Debian package cullide needs to build, test and plot.
+#
+# Non-interactive and idempotent: packages already installed are left alone, and when nothing
+# is missing the script only checks (well under a second) and says so. Only Debian's archive is
+# used (apt-get); nothing is downloaded from anywhere else. Run as root (or with sudo available).
+set -euo pipefail
+
+packages=(
+  # toolchain
+  build-essential cmake pkg-config git
+  # core maths and threading
+  libeigen3-dev libtbb-dev
+  # oracle: Embree 3 broad phase, CGAL exact predicates (header-only, needs GMP/MPFR, Boost)
+  libembree-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  # tests, benchmarks, command line, scene files, mesh input/output, PNG writer
+  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libassimp-dev libtinyobjloader-dev libmeshoptimizer-dev libstb-dev
+  # GL backend: libepoxy for loading, headless EGL with Mesa (llvmpipe when there is no GPU)
+  libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
+  # charts
+  python3 python3-matplotlib python3-numpy
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#packages[@]} Debian packages already installed; nothing to do."
+  exit 0
+fi
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then sudo="sudo"; else
+    echo "setup: ${#missing[@]} packages missing (${missing[*]}) and not root, no sudo: install them as root." >&2
+    exit 1
+  fi
+fi
+
+echo "setup: installing ${#missing[@]} missing Debian packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+echo "setup: done."
