@@ -1,0 +1,50 @@
+// Mesh input and output.
+//
+// Input goes through well-kept libraries: tinyobjloader for OBJ (it keeps the file's vertex
+// indices; assimp's OBJ importer does not) and assimp for OFF, PLY (ascii and binary) and STL.
+// Contract for every format:
+//   - vertex i of the file is positions[i]; faces keep the file's order; an n-gon is
+//     fan-triangulated in place (v0 v1 v2, v0 v2 v3, ...), giving n-2 consecutive triangles;
+//   - no welding, except for STL, which has no indices: STL vertices are welded when their three
+//     float coordinates are bit-identical (first occurrence gives the index, in file order), so
+//     a closed STL mesh gets its connectivity back; nothing else is merged;
+//   - the result passes validateMesh(); anything else throws InputError naming the file and the
+//     cause (missing/unreadable file, unknown format, parse error, NaN/Inf, index out of range,
+//     empty mesh, zero triangles, faces with fewer than three vertices).
+// Output: PLY (binary little-endian or ascii), optionally with one RGB colour per face
+// (used to show the PCS, as in the paper's Figures 6 and 7), and OFF. Writers write to a
+// temporary file in the same folder and rename it, so a failed write leaves nothing half-written.
+#pragma once
+
+#include "cullide/mesh.h"
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+
+namespace cullide {
+
+enum class MeshFormat { Obj, Off, Ply, Stl };
+
+// The format from the file extension (.obj .off .ply .stl, any case); throws InputError
+// naming the file when the extension is none of these.
+MeshFormat meshFormatFromPath(const std::filesystem::path& path);
+
+// Loads a mesh (see the contract above). Throws InputError.
+Mesh loadMesh(const std::filesystem::path& path);
+
+using Rgb8 = std::array<uint8_t, 3>;
+
+struct PlyWriteOptions {
+    bool binary = true;
+    std::span<const Rgb8> faceColours;  // empty, or one per triangle
+};
+
+// Writes `mesh` as PLY; throws InputError naming the file if it cannot be written.
+void writePly(const Mesh& mesh, const std::filesystem::path& path, const PlyWriteOptions& options = {});
+// Writes `mesh` as ascii OFF with floats printed round-trip exact (%.9g); deterministic bytes.
+void writeOff(const Mesh& mesh, const std::filesystem::path& path);
+
+}  // namespace cullide

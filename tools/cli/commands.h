@@ -1,0 +1,20 @@
+// The `cullide` command: one registration function per subcommand.
+//
+// Every subcommand reports bad input (files, scenes, options) as an InputError; main() prints it
+// as "cullide: error: <file or option>: <cause>" and exits with status 2. Status 1 is reserved
+// for a run that worked but found a failure it was asked to check for.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace cullide::cli {
+
+// A subcommand's action, run after parsing; returns the process exit status.
+using Action = std::function<int()>;
+
+void addInfoCommand(CLI::App& app, Action& action);
+void addMakeSceneCommand(CLI::App& app, Action& action);
+
+}  // namespace cullide::cli

@@ -1,0 +1,109 @@
+// `cullide info SCENE|MESH...`: what a scene or mesh holds, and what matters for image-space
+// culling in it (degenerate triangles, components, duplicated vertices).
+#include "commands.h"
+
+#include "cullide/error.h"
+#include "cullide/mesh_stats.h"
+#include "cullide/scene_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace cullide::cli {
+namespace {
+
+struct InfoOptions {
+    std::vector<std::string> paths;
+    bool json = false;
+    long frame = 0;
+};
+
+nlohmann::ordered_json boundsJson(const Bounds& b) {
+    if (b.empty()) return nullptr;
+    return {{"min", {b.lo.x(), b.lo.y(), b.lo.z()}}, {"max", {b.hi.x(), b.hi.y(), b.hi.z()}}};
+}
+
+nlohmann::ordered_json statsJson(const MeshStats& s) {
+    return {{"vertices", s.vertices},
+            {"triangles", s.triangles},
+            {"bounds", boundsJson(s.bounds)},
+            {"degenerate_triangles", s.degenerateTriangles},
+            {"components", s.components},
+            {"duplicate_vertices", s.duplicateVertices},
+            {"duplicate_triangles", s.duplicateTriangles},
+            {"unreferenced_vertices", s.unreferencedVertices}};
+}
+
+void printStats(const char* indent, const MeshStats& s) {
+    std::printf("%svertices %zu, triangles %zu\n", indent, s.vertices, s.triangles);
+    if (!s.bounds.empty())
+        std::printf("%sbounds [%g, %g, %g] .. [%g, %g, %g]\n", indent, s.bounds.lo.x(), s.bounds.lo.y(), s.bounds.lo.z(),
+                    s.bounds.hi.x(), s.bounds.hi.y(), s.bounds.hi.z());
+    std::printf("%sdegenerate triangles %zu, connected components %zu, duplicate vertices %zu, "
+                "duplicate triangles %zu, unreferenced vertices %zu\n",
+                indent, s.degenerateTriangles, s.components, s.duplicateVertices, s.duplicateTriangles,
+                s.unreferencedVertices);
+}
+
+int runInfo(const InfoOptions& o) {
+    nlohmann::ordered_json all = nlohmann::ordered_json::array();
+    for (const std::string& path : o.paths) {
+        const Animation animation = loadScene(path);
+        if (size_t(o.frame) >= animation.frameCount())
+            throw InputError("option --frame", "frame " + std::to_string(o.frame) + " requested, but " + path +
+                                                   " has " + std::to_string(animation.frameCount()) + " frame(s)");
+        const Scene scene = animation.sceneAt(size_t(o.frame));
+
+        nlohmann::ordered_json objects = nlohmann::ordered_json::array();
+        MeshStats total;
+        Bounds bounds;
+        if (!o.json) std::printf("%s: %zu object(s), %zu frame(s)\n", path.c_str(), scene.objects.size(), animation.frameCount());
+        for (size_t i = 0; i < scene.objects.size(); ++i) {
+            const MeshStats s = computeStats(scene.worldMesh(i));
+            total.vertices += s.vertices;
+            total.triangles += s.triangles;
+            total.degenerateTriangles += s.degenerateTriangles;
+            total.components += s.components;
+            total.duplicateVertices += s.duplicateVertices;
+            total.duplicateTriangles += s.duplicateTriangles;
+            total.unreferencedVertices += s.unreferencedVertices;
+            total.bounds.add(s.bounds);
+            if (o.json) {
+                nlohmann::ordered_json j = {{"name", scene.objects[i].name}};
+                j.update(statsJson(s));
+                objects.push_back(j);
+            } else {
+                std::printf("  object '%s'\n", scene.objects[i].name.c_str());
+                printStats("    ", s);
+            }
+        }
+        if (o.json) {
+            nlohmann::ordered_json j = {{"path", path}, {"frames", animation.frameCount()}, {"frame", o.frame},
+                                        {"objects", objects}};
+            j["total"] = statsJson(total);
+            all.push_back(j);
+        } else if (scene.objects.size() > 1) {
+            std::printf("  total\n");
+            printStats("    ", total);
+        }
+    }
+    if (o.json) std::printf("%s\n", all.dump(2).c_str());
+    return 0;
+}
+
+}  // namespace
+
+void addInfoCommand(CLI::App& app, Action& action) {
+    auto o = std::make_shared<InfoOptions>();
+    CLI::App* sub = app.add_subcommand("info", "Describe scenes or meshes: objects, vertices, triangles, bounds, "
+                                               "degenerate triangles, components, duplicate vertices");
+    sub->add_option("paths", o->paths, "Scene files (.json) or meshes (.obj .off .ply .stl)")->required();
+    sub->add_flag("--json", o->json, "Print JSON for machines instead of text");
+    sub->add_option("--frame", o->frame, "Animation frame to describe (default 0)")->check(CLI::NonNegativeNumber);
+    sub->callback([o, &action] { action = [o] { return runInfo(*o); }; });
+}
+
+}  // namespace cullide::cli

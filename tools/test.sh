@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The whole test suite, from a fresh Debian 12 machine: installs the Debian packages the project
+# needs (tools/setup.sh), builds in Release, runs every test with CTest, then builds and runs the
+# test suite under AddressSanitizer+UndefinedBehaviorSanitizer and under ThreadSanitizer.
+#
+#   bash tools/test.sh            # everything (what CI runs)
+#   CULLIDE_SANITIZERS=0 bash tools/test.sh   # Release tests only (quicker, for development)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+bash tools/setup.sh
+jobs=$(nproc)
+
+run_suite() {  # preset name, build dir
+  echo "== test.sh: configure and build ($1) in $2"
+  cmake --preset "$1" >/dev/null
+  cmake --build "$2" -j"$jobs"
+  echo "== test.sh: run the tests ($1)"
+  ctest --test-dir "$2" --output-on-failure -j"$jobs" --timeout 900
+}
+
+run_suite release build
+if [ "${CULLIDE_SANITIZERS:-1}" != "0" ]; then
+  export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+  export TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
+  run_suite asan build-asan
+  run_suite tsan build-tsan
+fi
+echo "== test.sh: all test suites passed"
