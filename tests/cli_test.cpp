@@ -1,0 +1,181 @@
+// The `cullide` command, run as a user runs it: exit codes, messages, bytes written.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <array>
+#include <unistd.h>
+#include <vector>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Run {
+    int status = -1;
+    std::string output;  // stdout and stderr together
+};
+
+std::string quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+Run cullide(const std::string& args) {
+    Run r;
+    const std::string cmd = quote(CULLIDE_CLI_PATH) + " " + args + " 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return r;
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+    const int st = pclose(p);
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    return r;
+}
+
+std::string readAll(const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+// Every regular file under `dir`, in sorted path order, concatenated with its relative path.
+std::string readTree(const fs::path& dir) {
+    std::vector<fs::path> files;
+    for (const auto& e : fs::recursive_directory_iterator(dir))
+        if (e.is_regular_file()) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    std::string all;
+    for (const fs::path& f : files) all += fs::relative(f, dir).string() + "\n" + readAll(f);
+    return all;
+}
+
+fs::path freshDir(const std::string& name) {
+    fs::path d = fs::temp_directory_path() / ("cullide_cli_test_" + std::to_string(::getpid())) / name;
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+const std::string kData = CULLIDE_DATA_DIR;
+
+}  // namespace
+
+// The acceptance figure: CGAL's cow has 5,804 triangles; also checks the JSON is parseable and
+// that the text and JSON forms agree.
+TEST(Cli, InfoReportsCowTriangles) {
+    const Run text = cullide("info " + quote(kData + "/meshes/cow.off"));
+    ASSERT_EQ(text.status, 0) << text.output;
+    EXPECT_NE(text.output.find("triangles 5804"), std::string::npos) << text.output;
+
+    const Run json = cullide("info --json " + quote(kData + "/meshes/cow.off"));
+    ASSERT_EQ(json.status, 0) << json.output;
+    const auto j = nlohmann::json::parse(json.output);
+    EXPECT_EQ(j.at(0).at("total").at("triangles").get<size_t>(), 5804u);
+    EXPECT_EQ(j.at(0).at("total").at("vertices").get<size_t>(), 2904u);
+}
+
+// Every bundled scene and mesh loads (a scene whose relative mesh paths break, or a data file
+// that stops parsing, fails here).
+TEST(Cli, InfoOnEveryBundledScene) {
+    for (const char* dir : {"scenes", "meshes"})
+        for (const auto& e : fs::directory_iterator(kData + "/" + dir)) {
+            const Run r = cullide("info " + quote(e.path().string()));
+            EXPECT_EQ(r.status, 0) << e.path() << ": " << r.output;
+        }
+}
+
+// Every malformed input under tests/data/bad is refused with exit status 2 and a message that
+// names the file, never a crash (a signal gives status >= 128) or a silent success.
+TEST(Cli, InfoRefusesEveryBadFile) {
+    size_t n = 0;
+    for (const auto& e : fs::directory_iterator(fs::path(CULLIDE_TEST_DATA_DIR) / "bad")) {
+        const std::string path = e.path().string();
+        const Run r = cullide("info " + quote(path));
+        EXPECT_EQ(r.status, 2) << path << ": " << r.output;
+        // Scenes that refer to a broken mesh name that mesh; either way the user sees the path.
+        EXPECT_NE(r.output.find(e.path().filename().string()), std::string::npos) << path << ": " << r.output;
+        EXPECT_NE(r.output.find("error"), std::string::npos) << r.output;
+        ++n;
+    }
+    EXPECT_GT(n, 10u) << "expected the bad-input corpus under tests/data/bad";
+}
+
+// A file that does not exist: the commonest mistake, and the message must say so.
+TEST(Cli, InfoMissingFile) {
+    const Run r = cullide("info /nonexistent/dir/none.off");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.output.find("/nonexistent/dir/none.off"), std::string::npos) << r.output;
+}
+
+// Absurd option values are refused by name, before any work is done.
+TEST(Cli, AbsurdOptionsAreRefused) {
+    const fs::path d = freshDir("absurd");
+    const std::string out = quote((d / "s.json").string());
+    const std::pair<std::string, std::string> cases[] = {
+        {"make-scene bunny --triangles 0 -o " + out, "--triangles"},
+        {"make-scene bunny --triangles 99999999999 -o " + out, "--triangles"},
+        {"make-scene bunny --triangles -5 -o " + out, "--triangles"},
+        {"make-scene bunny --frames 100000 -o " + out, "--frames"},
+        {"make-scene cylinders --count 0 -o " + out, "--count"},
+        {"make-scene teapot -o " + out, "teapot"},
+        {"make-scene bunny -o " + quote((d / "s.txt").string()), "--out"},
+        {"info --frame -1 " + quote(kData + "/meshes/cow.off"), "--frame"},
+        {"info --frame 7 " + quote(kData + "/meshes/cow.off"), "--frame"},
+        {"info", "paths"},
+        {"frobnicate", "frobnicate"},
+    };
+    for (const auto& [args, needle] : cases) {
+        const Run r = cullide(args);
+        EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+        EXPECT_NE(r.output.find(needle), std::string::npos) << args << ": " << r.output;
+    }
+    EXPECT_FALSE(fs::exists(d / "s.json")) << "a refused command wrote its output";
+}
+
+// Same kind, options and seed: the same bytes in every file written (the generators use no
+// unordered containers, threads or implementation-defined distributions). A different seed
+// changes the randomized scene.
+TEST(Cli, MakeSceneIsByteReproducible) {
+    for (const std::string kind : {"bunny", "cows", "cylinders"}) {
+        const fs::path a = freshDir(kind + "_a"), b = freshDir(kind + "_b");
+        const std::string opts = " --triangles 3000 --frames 2 --count 10 --seed 7 -o ";
+        ASSERT_EQ(cullide("make-scene " + kind + opts + quote((a / "s.json").string())).status, 0);
+        ASSERT_EQ(cullide("make-scene " + kind + opts + quote((b / "s.json").string())).status, 0);
+        size_t files = 0;
+        for (const auto& e : fs::recursive_directory_iterator(a)) {
+            if (!e.is_regular_file()) continue;
+            const fs::path other = b / fs::relative(e.path(), a);
+            ASSERT_TRUE(fs::exists(other)) << other;
+            EXPECT_EQ(readAll(e.path()), readAll(other)) << "differs: " << e.path();
+            ++files;
+        }
+        EXPECT_GE(files, 2u) << kind;
+        const Run info = cullide("info " + quote((a / "s.json").string()));
+        EXPECT_EQ(info.status, 0) << info.output;
+    }
+    const fs::path c = freshDir("cyl_c"), d = freshDir("cyl_d");
+    ASSERT_EQ(cullide("make-scene cylinders --count 10 --seed 1 -o " + quote((c / "s.json").string())).status, 0);
+    ASSERT_EQ(cullide("make-scene cylinders --count 10 --seed 2 -o " + quote((d / "s.json").string())).status, 0);
+    EXPECT_NE(readTree(c), readTree(d)) << "seeds 1 and 2 gave the same cylinders";
+}
+
+// A generator whose input is bad fails before writing: nothing half-written is left behind.
+TEST(Cli, MakeSceneWithBadMeshWritesNothing) {
+    const fs::path d = freshDir("badmesh");
+    const Run r = cullide("make-scene bunny --mesh /nonexistent.off -o " + quote((d / "s.json").string()));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.output.find("/nonexistent.off"), std::string::npos) << r.output;
+    EXPECT_TRUE(fs::is_empty(d)) << "files were written although the input was bad";
+}
