@@ -1,0 +1,110 @@
+// Cullide and its self-intersection variant: the potentially colliding set (PCS) of triangles
+// among the objects of a scene, by occlusion queries on any DepthBackend.
+//
+// References
+//   - N. Govindaraju, S. Redon, M. Lin, D. Manocha: CULLIDE: Interactive collision detection
+//     between complex models in large environments using graphics hardware. Graphics Hardware
+//     2003. ("original": Figure 2 of the seed paper.)
+//   - The seed paper, ../shared/papers/000_7db8250a290ddd48.txt: Figures 1 (the loop), 2
+//     (original reducePCS) and 3 (modified reducePCS, which keeps self-intersecting objects).
+//
+// Conventions
+//   - The scene is taken as it is (world positions from Scene::worldMesh). All objects' triangles
+//     go to the backend once per call as one geometry, each object's triangles permuted by its
+//     hierarchy so that every node is one contiguous draw.
+//   - A view direction d looks along +d; for each reducePCS call the orthographic view is fitted
+//     tightly to the triangles of the current PCS: x/y to their projected bounds with square
+//     pixels (the longer side fills the viewport, the box centred), near/far to their depth
+//     extent (plus two depth units at each end). A PCS that is flat along d, or a point, gets a
+//     tiny box around it so the view stays valid.
+//   - A node is pruned by one reducePCS call (one direction) when it is fully visible in both the
+//     forward and the reverse pass (the paper's Lemma 3.2): its queries passed no fragment.
+//   - The loop (Figure 1): start from the objects' roots; for each level, run reducePCS once per
+//     direction (in the given order) on the current PCS; stop when the PCS is empty or holds only
+//     leaves (the leaves have then been tested too); otherwise replace every node by its children.
+//   - Deterministic: same scene, options and backend results, same PCS.
+#pragma once
+
+#include "cullide/depth_backend.h"
+#include "cullide/hierarchy.h"
+#include "cullide/scene.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace cullide {
+
+enum class CullMethod : uint8_t {
+    // Figure 2: inter-object only. Query with GEQUAL against the objects drawn before (forward)
+    // or after (reverse), so touching counts as colliding and contacts are kept. Below the object
+    // level a node is tested against the nodes of other objects only, never its own siblings.
+    Original,
+    // Figure 3: draw with LESS, then re-draw under GREATER with a query (forward pass); plain
+    // GREATER queries then LESS draws in the reverse pass. Self-intersections stay in the PCS;
+    // contacts (equal depth) are lost, as the paper says.
+    Modified,
+};
+
+const char* toString(CullMethod m);
+CullMethod parseCullMethod(const std::string& text);  // "original" | "modified"; InputError
+
+// Directions: the six axis directions +x, -x, +y, -y, +z, -z (the default).
+std::vector<Vec3d> axisDirections();
+// N directions spread over the sphere (a Fibonacci lattice, deterministic). N >= 1.
+std::vector<Vec3d> spreadDirections(uint32_t n);
+// Parses "axes", "N" (spread), or a list "x,-y,z" / "1 0 0;0 1 1" of directions; InputError.
+std::vector<Vec3d> parseDirections(const std::string& text);
+
+struct CullideOptions {
+    CullMethod method = CullMethod::Modified;
+    std::vector<Vec3d> directions = axisDirections();
+    int width = 500, height = 500;
+    DepthFormat depth = DepthFormat::unorm(24);
+    HierarchyOptions hierarchy;
+    // Throws InputError naming the option on absurd values (no directions, a zero or non-finite
+    // direction, a viewport outside 1..16384).
+    void validate() const;
+};
+
+// One reducePCS call: the data behind the paper's Figures 9-11.
+struct PassStats {
+    uint32_t level = 0;        // hierarchy depth of the PCS nodes' level (0: objects)
+    uint32_t direction = 0;    // index into CullideOptions::directions
+    size_t nodesIn = 0, nodesOut = 0;
+    size_t trianglesIn = 0, trianglesOut = 0;
+    size_t trianglesRendered = 0;  // triangles drawn, both passes together
+    size_t queries = 0;
+    double seconds = 0;        // wall time of the call, command building and backend included
+};
+
+struct PcsTriangle {
+    uint32_t object = 0, triangle = 0;  // the object's index in the scene, the triangle's in its mesh
+    friend auto operator<=>(const PcsTriangle&, const PcsTriangle&) = default;
+};
+
+struct CullideResult {
+    std::vector<PcsTriangle> pcs;  // sorted by (object, triangle)
+    std::vector<PassStats> passes;
+    double hierarchySeconds = 0;   // building every object's hierarchy
+    double totalSeconds = 0;       // everything, hierarchy and geometry upload included
+    uint32_t levels = 0;           // hierarchy levels visited
+};
+
+// Computes the PCS of `scene` with `backend`. Throws InputError on bad options.
+CullideResult runCullide(const Scene& scene, DepthBackend& backend, const CullideOptions& options);
+
+// A run of triangles [first, first + count) in a geometry's triangle list.
+struct TriangleRange {
+    uint32_t first = 0, count = 0;
+};
+
+// Fits the orthographic view of direction `dir` tightly to the triangles in `ranges` (see the
+// conventions above). Near and far are widened by two depth units of `depth` each, so that no
+// fragment lands exactly on the cleared far value (which would make GEQUAL pass and LESS fail
+// there). Exposed for tests and for the GL backend's validation.
+OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                  std::span<const TriangleRange> ranges, const Vec3d& dir, int width, int height,
+                  const DepthFormat& depth);
+
+}  // namespace cullide

@@ -1,0 +1,334 @@
+// Cullide (Govindaraju et al. 2003) and the seed paper's self-intersection variant: Figures 1-3
+// of ../shared/papers/000_7db8250a290ddd48.txt, on any DepthBackend. See cullide.h.
+#include "cullide/cullide.h"
+
+#include "cullide/error.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+namespace cullide {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+}  // namespace
+
+const char* toString(CullMethod m) { return m == CullMethod::Original ? "original" : "modified"; }
+
+CullMethod parseCullMethod(const std::string& text) {
+    if (text == "original") return CullMethod::Original;
+    if (text == "modified") return CullMethod::Modified;
+    throw InputError("option --method", "unknown method '" + text + "' (expected original or modified)");
+}
+
+std::vector<Vec3d> axisDirections() {
+    return {Vec3d(1, 0, 0), Vec3d(-1, 0, 0), Vec3d(0, 1, 0), Vec3d(0, -1, 0), Vec3d(0, 0, 1), Vec3d(0, 0, -1)};
+}
+
+std::vector<Vec3d> spreadDirections(uint32_t n) {
+    if (n < 1 || n > 10000) throw InputError("option --directions", "the number of directions must be 1 to 10000");
+    // Fibonacci lattice: z evenly spaced in (-1, 1), longitude stepped by the golden angle.
+    std::vector<Vec3d> dirs;
+    const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+    for (uint32_t i = 0; i < n; ++i) {
+        const double z = 1.0 - (2.0 * i + 1.0) / n;
+        const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double phi = golden * i;
+        dirs.push_back(Vec3d(r * std::cos(phi), r * std::sin(phi), z).normalized());
+    }
+    return dirs;
+}
+
+std::vector<Vec3d> parseDirections(const std::string& text) {
+    const std::string source = "option --directions";
+    if (text == "axes") return axisDirections();
+    if (!text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+        if (text.size() > 6) throw InputError(source, "too many directions: " + text);
+        return spreadDirections(uint32_t(std::stoul(text)));
+    }
+    std::vector<Vec3d> dirs;
+    const char separator = text.find(';') != std::string::npos ? ';' : ',';
+    std::stringstream items(text);
+    std::string item;
+    while (std::getline(items, item, separator)) {
+        item.erase(0, item.find_first_not_of(' '));
+        item.erase(item.find_last_not_of(' ') + 1);
+        Vec3d d;
+        if (item == "x" || item == "+x") d = Vec3d(1, 0, 0);
+        else if (item == "-x") d = Vec3d(-1, 0, 0);
+        else if (item == "y" || item == "+y") d = Vec3d(0, 1, 0);
+        else if (item == "-y") d = Vec3d(0, -1, 0);
+        else if (item == "z" || item == "+z") d = Vec3d(0, 0, 1);
+        else if (item == "-z") d = Vec3d(0, 0, -1);
+        else {
+            std::stringstream nums(item);
+            std::string rest;
+            if (!(nums >> d.x() >> d.y() >> d.z()) || (nums >> rest))
+                throw InputError(source, "cannot read direction '" + item +
+                                             "' (expected axes, a count, or a list like x,-y,z or '1 0 0;0 1 1')");
+        }
+        if (!d.allFinite() || d.norm() == 0) throw InputError(source, "direction '" + item + "' is zero or not finite");
+        dirs.push_back(d.normalized());
+    }
+    if (dirs.empty()) throw InputError(source, "no directions given");
+    return dirs;
+}
+
+void CullideOptions::validate() const {
+    if (directions.empty()) throw InputError("option --directions", "no directions given");
+    for (const Vec3d& d : directions)
+        if (!d.allFinite() || d.norm() == 0) throw InputError("option --directions", "a direction is zero or not finite");
+    if (width < 1 || width > 16384 || height < 1 || height > 16384)
+        throw InputError("option --resolution", "the viewport must be 1 to 16384 pixels per side, not " +
+                                                    std::to_string(width) + "x" + std::to_string(height));
+    if (hierarchy.leafSize < 1) throw InputError("option --leaf-size", "the leaf size must be at least 1");
+    if (hierarchy.branching < 2) throw InputError("option --branching", "the branching must be at least 2");
+}
+
+OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                  std::span<const TriangleRange> ranges, const Vec3d& dir, int width, int height,
+                  const DepthFormat& depth) {
+    OrthoView view = OrthoView::looking(dir);
+    view.width = width;
+    view.height = height;
+    view.depth = depth;
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    Vec3d lo(inf, inf, inf), hi(-inf, -inf, -inf);
+    for (const TriangleRange& r : ranges)
+        for (uint32_t t = r.first; t < r.first + r.count; ++t)
+            for (uint32_t v : triangles[t]) {
+                const Vec3d p = positions[v].cast<double>();
+                const Vec3d q(view.right.dot(p), view.up.dot(p), view.dir.dot(p));
+                lo = lo.cwiseMin(q);
+                hi = hi.cwiseMax(q);
+            }
+    if (!(lo.x() <= hi.x())) lo = hi = Vec3d::Zero();  // nothing to fit: any valid view will do
+
+    // Square pixels: the pixel size that fits both extents; the box centred on the bounds.
+    const double scale = std::max({std::abs(lo.x()), std::abs(hi.x()), std::abs(lo.y()), std::abs(hi.y()),
+                                   std::abs(lo.z()), std::abs(hi.z()), 1e-30});
+    const double tiny = scale * 1e-6;
+    const double pixel = std::max({(hi.x() - lo.x()) / width, (hi.y() - lo.y()) / height, tiny / std::max(width, height)});
+    const double cx = 0.5 * (lo.x() + hi.x()), cy = 0.5 * (lo.y() + hi.y());
+    view.xmin = cx - 0.5 * pixel * width;
+    view.xmax = cx + 0.5 * pixel * width;
+    view.ymin = cy - 0.5 * pixel * height;
+    view.ymax = cy + 0.5 * pixel * height;
+    // Depth: the extent plus two depth units at each end (so the farthest fragment stays below
+    // the cleared value 1.0 after rounding, and the nearest above 0).
+    const double extent = std::max(hi.z() - lo.z(), tiny);
+    const double margin = 2.0 * depth.resolution();
+    const double range = extent / (1.0 - 2.0 * margin);
+    view.znear = lo.z() - margin * range;
+    view.zfar = view.znear + range;
+    if (view.zfar < hi.z() + margin * range) view.zfar = hi.z() + margin * range;
+    return view;
+}
+
+namespace {
+
+// One node of the PCS: an object's hierarchy node, and its triangles in the uploaded geometry.
+struct Item {
+    uint32_t object = 0, node = 0;
+    TriangleRange range;
+};
+
+class Culler {
+public:
+    Culler(const Scene& scene, DepthBackend& backend, const CullideOptions& opt)
+        : scene_(scene), backend_(backend), opt_(opt) {}
+
+    CullideResult run() {
+        const auto start = Clock::now();
+        CullideResult result;
+        build(result);
+
+        std::vector<Item> pcs;
+        for (uint32_t i = 0; i < hierarchies_.size(); ++i)
+            if (!hierarchies_[i].nodes.empty() && hierarchies_[i].nodes[0].count > 0) pcs.push_back(item(i, 0));
+
+        for (uint32_t level = 0; !pcs.empty(); ++level) {
+            result.levels = level + 1;
+            for (uint32_t d = 0; d < opt_.directions.size() && !pcs.empty(); ++d)
+                pcs = reduce(pcs, level, d, result.passes);
+            bool allLeaves = true;
+            for (const Item& it : pcs) allLeaves = allLeaves && node(it).isLeaf();
+            if (pcs.empty() || allLeaves) break;
+            std::vector<Item> next;  // children replace their parent in place: objects stay contiguous
+            for (const Item& it : pcs) {
+                const HierarchyNode& n = node(it);
+                if (n.isLeaf()) next.push_back(it);
+                else
+                    for (uint32_t c = 0; c < n.childCount; ++c) next.push_back(item(it.object, n.firstChild + c));
+            }
+            pcs = std::move(next);
+        }
+
+        for (const Item& it : pcs) {
+            const Hierarchy& h = hierarchies_[it.object];
+            const HierarchyNode& n = node(it);
+            for (uint32_t k = n.first; k < n.first + n.count; ++k) result.pcs.push_back({it.object, h.order[k]});
+        }
+        std::sort(result.pcs.begin(), result.pcs.end());
+        result.totalSeconds = secondsSince(start);
+        return result;
+    }
+
+private:
+    // World meshes, hierarchies, and the geometry upload (each object's triangles in hierarchy order).
+    void build(CullideResult& result) {
+        const size_t n = scene_.objects.size();
+        const auto start = Clock::now();
+        std::vector<Mesh> world(n);
+        hierarchies_.resize(n);
+        tbb::parallel_for(size_t(0), n, [&](size_t i) {
+            world[i] = scene_.worldMesh(i);
+            hierarchies_[i] = buildHierarchy(world[i], opt_.hierarchy);
+        });
+        result.hierarchySeconds = secondsSince(start);
+
+        triangleOffset_.assign(n, 0);
+        size_t vertices = 0, triangles = 0;
+        for (size_t i = 0; i < n; ++i) {
+            triangleOffset_[i] = uint32_t(triangles);
+            vertices += world[i].positions.size();
+            triangles += world[i].triangles.size();
+        }
+        if (vertices > std::numeric_limits<uint32_t>::max() || triangles > std::numeric_limits<uint32_t>::max())
+            throw InputError("scene", "more than 2^32 vertices or triangles");
+        positions_.clear();
+        positions_.reserve(vertices);
+        triangles_.clear();
+        triangles_.reserve(triangles);
+        for (size_t i = 0; i < n; ++i) {
+            const uint32_t base = uint32_t(positions_.size());
+            positions_.insert(positions_.end(), world[i].positions.begin(), world[i].positions.end());
+            for (uint32_t t : hierarchies_[i].order) {
+                const Triangle& tri = world[i].triangles[t];
+                triangles_.push_back({tri[0] + base, tri[1] + base, tri[2] + base});
+            }
+        }
+        backend_.setGeometry(positions_, triangles_);
+    }
+
+    const HierarchyNode& node(const Item& it) const { return hierarchies_[it.object].nodes[it.node]; }
+
+    Item item(uint32_t object, uint32_t nodeIndex) const {
+        const HierarchyNode& n = hierarchies_[object].nodes[nodeIndex];
+        return {object, nodeIndex, {triangleOffset_[object] + n.first, n.count}};
+    }
+
+    // One reducePCS call in direction d: returns the nodes that stay.
+    std::vector<Item> reduce(const std::vector<Item>& pcs, uint32_t level, uint32_t d, std::vector<PassStats>& passes) {
+        const auto start = Clock::now();
+        ranges_.clear();
+        for (const Item& it : pcs) ranges_.push_back(it.range);
+        backend_.setView(fitView(positions_, triangles_, ranges_, opt_.directions[d], opt_.width, opt_.height, opt_.depth));
+
+        list_.reset();
+        PassStats st;
+        st.level = level;
+        st.direction = d;
+        st.nodesIn = pcs.size();
+        for (const Item& it : pcs) st.trianglesIn += it.range.count;
+
+        // forwardQuery[i] / reverseQuery[i]: the query numbers of PCS item i in each pass.
+        std::vector<uint32_t> forwardQuery(pcs.size()), reverseQuery(pcs.size());
+        if (opt_.method == CullMethod::Modified) {
+            // Figure 3, forward: write the object, then test it against everything so far,
+            // itself included, with GREATER (anything in front of one of its fragments fails it).
+            list_.clear(1.0);
+            for (size_t i = 0; i < pcs.size(); ++i) {
+                list_.depthMask(true);
+                list_.depthFunc(DepthFunc::Less);
+                list_.draw(pcs[i].range.first, pcs[i].range.count);
+                list_.depthMask(false);
+                list_.depthFunc(DepthFunc::Greater);
+                forwardQuery[i] = list_.beginQuery(QueryKind::SamplesPassed);
+                list_.draw(pcs[i].range.first, pcs[i].range.count);
+                list_.endQuery();
+            }
+            // Reverse: test against the objects after it, then write it.
+            list_.clear(1.0);
+            for (size_t i = pcs.size(); i-- > 0;) {
+                list_.depthMask(false);
+                list_.depthFunc(DepthFunc::Greater);
+                reverseQuery[i] = list_.beginQuery(QueryKind::SamplesPassed);
+                list_.draw(pcs[i].range.first, pcs[i].range.count);
+                list_.endQuery();
+                list_.depthMask(true);
+                list_.depthFunc(DepthFunc::Less);
+                list_.draw(pcs[i].range.first, pcs[i].range.count);
+            }
+        } else {
+            // Figure 2, per object: query every node of the object with GEQUAL against the other
+            // objects drawn so far, then write them all. Siblings never test each other.
+            std::vector<std::pair<size_t, size_t>> groups;  // [begin, end) of each object's nodes
+            for (size_t g = 0; g < pcs.size();) {
+                size_t e = g;
+                while (e < pcs.size() && pcs[e].object == pcs[g].object) ++e;
+                groups.push_back({g, e});
+                g = e;
+            }
+            auto group = [&](const std::pair<size_t, size_t>& grp, std::vector<uint32_t>& query) {
+                list_.depthMask(false);
+                list_.depthFunc(DepthFunc::GEqual);
+                for (size_t i = grp.first; i < grp.second; ++i) {
+                    query[i] = list_.beginQuery(QueryKind::SamplesPassed);
+                    list_.draw(pcs[i].range.first, pcs[i].range.count);
+                    list_.endQuery();
+                }
+                list_.depthMask(true);
+                list_.depthFunc(DepthFunc::Less);
+                for (size_t i = grp.first; i < grp.second; ++i) list_.draw(pcs[i].range.first, pcs[i].range.count);
+            };
+            list_.clear(1.0);
+            for (const auto& grp : groups) group(grp, forwardQuery);
+            list_.clear(1.0);
+            for (size_t g = groups.size(); g-- > 0;) group(groups[g], reverseQuery);
+        }
+
+        const std::vector<uint64_t> results = backend_.execute(list_);
+        std::vector<Item> kept;
+        for (size_t i = 0; i < pcs.size(); ++i) {
+            const bool fullyVisible = results[forwardQuery[i]] == 0 && results[reverseQuery[i]] == 0;
+            if (!fullyVisible) kept.push_back(pcs[i]);
+        }
+        st.nodesOut = kept.size();
+        for (const Item& it : kept) st.trianglesOut += it.range.count;
+        for (const Command& c : list_.commands())
+            if (c.op == Command::Op::Draw) st.trianglesRendered += c.count;
+        st.queries = list_.queryCount();
+        st.seconds = secondsSince(start);
+        passes.push_back(st);
+        return kept;
+    }
+
+    const Scene& scene_;
+    DepthBackend& backend_;
+    const CullideOptions& opt_;
+    std::vector<Hierarchy> hierarchies_;
+    std::vector<uint32_t> triangleOffset_;
+    std::vector<Vec3f> positions_;
+    std::vector<Triangle> triangles_;
+    std::vector<TriangleRange> ranges_;
+    CommandList list_;
+};
+
+}  // namespace
+
+CullideResult runCullide(const Scene& scene, DepthBackend& backend, const CullideOptions& options) {
+    options.validate();
+    return Culler(scene, backend, options).run();
+}
+
+}  // namespace cullide
