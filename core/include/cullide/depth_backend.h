@@ -106,7 +106,10 @@ struct Command {
 
 // A command list: what one reducePCS pass (or any depth-only workload) asks a backend to do.
 // Queries may not nest (GL allows one active query per target); results are numbered in the
-// order of beginQuery() calls.
+// order of beginQuery() calls. Misuse is reported when recorded, as InputError("command list",
+// cause): beginQuery() while a query is open, endQuery() without one, a clear depth outside
+// [0,1] (or NaN), a draw range whose end overflows 32 bits. Draw ranges are checked against the
+// geometry by the backend's execute().
 class CommandList {
 public:
     void clear(double depth = 1.0);
@@ -115,6 +118,7 @@ public:
     uint32_t beginQuery(QueryKind kind = QueryKind::SamplesPassed);  // returns the query's index
     void endQuery();
     void draw(uint32_t first, uint32_t count);
+    bool queryOpen() const { return inQuery_; }
 
     const std::vector<Command>& commands() const { return commands_; }
     uint32_t queryCount() const { return queries_; }
@@ -155,15 +159,18 @@ public:
     virtual void setView(const OrthoView& view) = 0;
 
     // Executes the commands in order and returns one result per query (index = query number).
-    // Draw ranges must lie inside the current geometry; a query left open is an error.
+    // Draw ranges must lie inside the current geometry and no query may be left open; otherwise
+    // throws InputError("command list", ...) before executing anything. Needs setView() first.
     virtual std::vector<uint64_t> execute(const CommandList& commands) = 0;
 
     // The current depth buffer.
     virtual DepthImage readDepth() = 0;
 };
 
-// Immediate mode over any backend: each call executes at once (one-command lists), for tests
-// and exploration. endQuery() returns the query's result.
+// Immediate mode over any backend, for tests and exploration. Outside a query each call executes
+// at once (a one-command list). Between beginQuery() and endQuery() the commands are buffered and
+// run as one list at endQuery(), which returns the query's result (so a backend never sees a
+// query split across lists). Misuse throws InputError("command list", ...) as CommandList does.
 class ImmediateContext {
 public:
     explicit ImmediateContext(DepthBackend& backend) : backend_(backend) {}

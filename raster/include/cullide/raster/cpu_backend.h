@@ -1,0 +1,65 @@
+// The CPU reference backend: a deterministic software GL depth buffer with occlusion queries.
+//
+// Exactly what Cullide asks of a GPU (Govindaraju et al., CULLIDE, Graphics Hardware 2003; the
+// self-intersection variant in /work/shared/papers/000_7db8250a290ddd48.txt, Sections 3-5):
+// depth-only orthographic rasterization, the eight depth functions, a depth mask, clears and
+// SAMPLES_PASSED / ANY_SAMPLES_PASSED queries. The rules (subpixel snapping, fill rule, depth
+// interpolation, unorm rounding, clipping) are in cullide/raster/rules.h.
+//
+// Two execution paths, always built, always giving bit-identical depth buffers and query results:
+//   - fast (default): per command list, every drawn triangle is set up once (clipped, snapped,
+//     edge functions, depth plane) and binned to square screen tiles; each tile is one oneTBB
+//     task that walks, in command order, only the clears and draws touching it, and within a draw
+//     only its triangles binned to the tile (found by binary search in the tile's sorted list).
+//     Per-tile query counts are kept as sparse (query, count) lists and summed at the end.
+//     Nothing depends on scheduling, so results are identical for any thread count.
+//   - scalar reference (`scalarReference = true`): one thread, commands in order, each triangle
+//     tested at every pixel centre of the viewport with edge functions evaluated from scratch.
+//     Slow (O(pixels) per triangle) and obviously correct; used by the differential tests.
+#pragma once
+
+#include "cullide/depth_backend.h"
+#include "cullide/raster/rules.h"
+
+#include <cstdint>
+#include <memory>
+
+namespace cullide::raster {
+
+struct CpuBackendOptions {
+    int subpixelBits = kDefaultSubpixelBits;   // S, kMinSubpixelBits..kMaxSubpixelBits
+    FillRule fillRule = FillRule::BottomLeft;
+    int threads = 0;                           // 0: oneTBB's default; else a task_arena of this size
+    int tileSize = kDefaultTileSize;           // fast path tile edge in pixels, 8..1024
+    bool scalarReference = false;              // use the scalar reference path instead
+};
+
+// What the last execute() did, counted per drawn triangle instance (a triangle drawn twice counts
+// twice). Identical for the fast and the reference path and for any thread count.
+struct RasterStats {
+    uint64_t draws = 0;             // draw commands
+    uint64_t triangles = 0;         // triangles submitted by draws
+    uint64_t rejected = 0;          // entirely outside the viewport or the depth range
+    uint64_t clipped = 0;           // crossing the depth range or the guard band (clipped, then drawn)
+    uint64_t zeroArea = 0;          // not rejected, but every snapped (sub-)triangle has zero area:
+                                    // edge-on in this view, produce no fragment (paper Section 5)
+    uint64_t fragments = 0;         // covered pixel centres (fragments reaching the depth test)
+    uint64_t passed = 0;            // fragments that passed the depth test
+    friend bool operator==(const RasterStats&, const RasterStats&) = default;
+};
+
+class CpuBackend : public DepthBackend {
+public:
+    ~CpuBackend() override = default;
+    virtual const CpuBackendOptions& options() const = 0;
+    // Counters of the most recent execute() (zero before the first).
+    virtual const RasterStats& lastStats() const = 0;
+};
+
+// Creates a CPU backend. Throws InputError("cpu backend options", ...) on options out of range.
+// Before the first setView() the viewport is undefined and execute() throws; after a setView()
+// that changes the viewport size or depth format, the buffer holds the far value 1.0 (GL leaves it
+// undefined; we make it deterministic).
+std::unique_ptr<CpuBackend> makeCpuBackend(const CpuBackendOptions& options = {});
+
+}  // namespace cullide::raster

@@ -1,0 +1,534 @@
+// The CPU reference backend: a GL depth buffer and occlusion queries, tiled and multithreaded
+// with oneTBB, deterministic (bit-identical results for any thread count).
+//
+// References: Govindaraju, Redon, Lin, Manocha, CULLIDE (Graphics Hardware 2003) and the seed
+// paper /work/shared/papers/000_7db8250a290ddd48.txt (Sections 3-5): what a backend must do.
+// Mesa llvmpipe (lp_rast, lp_setup): 64x64 tiles, binning, per-tile in-order execution,
+// per-thread occlusion counters summed at the end. Rules: cullide/raster/rules.h.
+//
+// One command list, fast path:
+//   1. validate (draw ranges inside the geometry, no query left open);
+//   2. window coordinates of all vertices (cached per geometry + view);
+//   3. set up every triangle drawn by the list once (union of the draw ranges, in triangle order,
+//      parallel over chunks): clip, snap, edge functions, depth plane, pixel bbox, tile rect.
+//      Records are compacted in triangle order, so a draw [first, first+count) is the record
+//      range [recBegin[first], recEnd[first+count-1]);
+//   4. bin the records to tiles (CSR, each tile's list sorted by record index);
+//   5. turn clears and draws into events carrying the GL state (function, mask, open query) and
+//      bin each to the tiles its records touch (a clear touches all tiles);
+//   6. one task per tile walks its events in order; for a draw it finds the draw's records in
+//      the tile's list by galloping from the previous position (cheap for reducePCS's runs of
+//      neighbouring and repeated ranges) and rasterizes them clipped to the tile. Query counts go
+//      to a per-tile sparse list of (query, count), in query order;
+//   7. sum the per-tile lists into the results (integers: order-free).
+// Every pixel is owned by exactly one tile and processed in command order, so the depth buffer
+// and the counts do not depend on scheduling.
+#include "cullide/raster/cpu_backend.h"
+
+#include "cullide/error.h"
+#include "reference_path.h"
+#include "triangle_setup.h"
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
+
+#include <algorithm>
+#include <array>
+#include <string>
+
+namespace cullide::raster {
+
+const char* toString(FillRule rule) { return rule == FillRule::BottomLeft ? "bottom-left" : "top-left"; }
+
+namespace {
+
+using detail::EdgeTri;
+using detail::SetupParams;
+using detail::SnappedTri;
+using detail::WinVertex;
+
+constexpr uint32_t kSetupChunk = 1024;  // triangles per setup task
+constexpr uint32_t kBinChunk = 4096;    // records (or events) per binning task
+constexpr uint32_t kMaxBinChunks = 64;
+
+// Tile rectangle [tx0, tx1] x [ty0, ty1], inclusive; tx0 > tx1 when empty.
+struct TileRect {
+    uint16_t tx0, ty0, tx1, ty1;
+};
+
+struct Event {
+    bool clear = false;
+    DepthFunc func = DepthFunc::Less;
+    bool mask = true;
+    int32_t query = -1;
+    uint32_t clearValue = 0;
+    uint32_t recBegin = 0, recEnd = 0;  // draw: record range
+    uint32_t first = 0, count = 0;      // draw: triangle range
+    TileRect tiles{1, 1, 0, 0};
+};
+
+struct QueryCount {
+    uint32_t query;
+    uint64_t count;
+};
+
+// Per-tile results, padded against false sharing.
+struct alignas(64) TileOut {
+    std::vector<QueryCount> queries;
+    uint64_t fragments = 0, passed = 0;
+};
+
+// The hot loop: one record clipped to a pixel rectangle (inclusive bounds).
+template <DepthFunc F, bool Float>
+void rasterizeInTile(const EdgeTri& t, int bx0, int by0, int bx1, int by1, uint32_t* depth, size_t stride, bool mask,
+                     int bits, uint64_t& fragments, uint64_t& passed) {
+    const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
+    const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
+    if (x0 > x1 || y0 > y1) return;
+    const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2];
+    uint64_t frag = 0, pass = 0;
+    for (int j = y0; j <= y1; ++j) {
+        int64_t e0 = a0 * x0 + t.b[0] * j + t.c[0];
+        int64_t e1 = a1 * x0 + t.b[1] * j + t.c[1];
+        int64_t e2 = a2 * x0 + t.b[2] * j + t.c[2];
+        const double row = t.plane.row(j);
+        uint32_t* d = depth + size_t(j) * stride;
+        for (int i = x0; i <= x1; ++i, e0 += a0, e1 += a1, e2 += a2) {
+            if ((e0 | e1 | e2) < 0) continue;
+            ++frag;
+            const double z = clampDepth(t.plane.at(row, i));
+            const uint32_t incoming = Float ? std::bit_cast<uint32_t>(float(z)) : encodeUnorm(z, bits);
+            if (!depthTest(F, incoming, d[i])) continue;
+            ++pass;
+            if (mask) d[i] = incoming;
+        }
+    }
+    fragments += frag;
+    passed += pass;
+}
+
+using RasterFn = void (*)(const EdgeTri&, int, int, int, int, uint32_t*, size_t, bool, int, uint64_t&, uint64_t&);
+
+template <bool Float>
+constexpr std::array<RasterFn, 8> rasterTable() {
+    return {&rasterizeInTile<DepthFunc::Never, Float>,   &rasterizeInTile<DepthFunc::Less, Float>,
+            &rasterizeInTile<DepthFunc::Equal, Float>,   &rasterizeInTile<DepthFunc::LEqual, Float>,
+            &rasterizeInTile<DepthFunc::Greater, Float>, &rasterizeInTile<DepthFunc::NotEqual, Float>,
+            &rasterizeInTile<DepthFunc::GEqual, Float>,  &rasterizeInTile<DepthFunc::Always, Float>};
+}
+
+// First index in [lo, hi) of `v` with v[idx] >= key, searching outwards from `hint` (galloping).
+size_t gallopLowerBound(const uint32_t* v, size_t n, size_t hint, uint32_t key) {
+    if (hint > n) hint = n;
+    if (hint < n && v[hint] < key) {  // forward
+        size_t step = 1, lo = hint + 1;
+        while (hint + step < n && v[hint + step] < key) {
+            lo = hint + step + 1;
+            step *= 2;
+        }
+        const size_t hi = std::min(n, hint + step);
+        return size_t(std::lower_bound(v + lo, v + hi, key) - v);
+    }
+    // backward: v[hint] >= key (or hint == n)
+    size_t step = 1, hi = hint;
+    while (step <= hint && v[hint - step] >= key) {
+        hi = hint - step;
+        step *= 2;
+    }
+    const size_t lo = step <= hint ? hint - step + 1 : 0;
+    return size_t(std::lower_bound(v + lo, v + hi, key) - v);
+}
+
+class CpuBackendImpl final : public CpuBackend {
+public:
+    explicit CpuBackendImpl(const CpuBackendOptions& options)
+        : options_(options), arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {}
+
+    std::string describe() const override {
+        std::string s = options_.scalarReference ? "cpu scalar reference" : "cpu reference";
+        s += " (" + std::to_string(options_.subpixelBits) + " subpixel bits, " + toString(options_.fillRule) +
+             " fill rule";
+        if (!options_.scalarReference)
+            s += ", " + std::to_string(options_.tileSize) + " px tiles, " +
+                 (options_.threads > 0 ? std::to_string(options_.threads) : std::string("default")) + " threads";
+        return s + ")";
+    }
+
+    const CpuBackendOptions& options() const override { return options_; }
+    const RasterStats& lastStats() const override { return stats_; }
+
+    void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override {
+        const size_t n = positions.size();
+        for (size_t t = 0; t < triangles.size(); ++t)
+            for (uint32_t v : triangles[t])
+                if (v >= n)
+                    throw InputError("geometry", "triangle " + std::to_string(t) + " refers to vertex " +
+                                                     std::to_string(v) + " of " + std::to_string(n));
+        if (triangles.size() >= size_t(UINT32_MAX))
+            throw InputError("geometry", "too many triangles for 32-bit indices");
+        positions_.assign(positions.begin(), positions.end());
+        triangles_.assign(triangles.begin(), triangles.end());
+        windowValid_ = false;
+    }
+
+    void setView(const OrthoView& view) override {
+        view.validate();
+        const bool resize = !haveView_ || view.width != view_.width || view.height != view_.height ||
+                            !(view.depth == view_.depth);
+        view_ = view;
+        haveView_ = true;
+        windowValid_ = false;
+        params_.subpixelBits = options_.subpixelBits;
+        params_.fillRule = options_.fillRule;
+        params_.width = view.width;
+        params_.height = view.height;
+        if (resize) {
+            depth_.assign(size_t(view.width) * size_t(view.height), encodeDepth(1.0, view.depth));
+            tilesX_ = (view.width + options_.tileSize - 1) / options_.tileSize;
+            tilesY_ = (view.height + options_.tileSize - 1) / options_.tileSize;
+            tileOut_.assign(size_t(tilesX_) * size_t(tilesY_), TileOut{});
+        }
+    }
+
+    std::vector<uint64_t> execute(const CommandList& list) override {
+        if (!haveView_) throw InputError("command list", "execute() before setView()");
+        if (list.queryOpen()) throw InputError("command list", "a query is left open at the end of the list");
+        for (const Command& c : list.commands())
+            if (c.op == Command::Op::Draw && uint64_t(c.first) + c.count > triangles_.size())
+                throw InputError("command list", "draw range [" + std::to_string(c.first) + ", " +
+                                                     std::to_string(uint64_t(c.first) + c.count) +
+                                                     ") exceeds the geometry's " + std::to_string(triangles_.size()) +
+                                                     " triangles");
+        stats_ = RasterStats{};
+        std::vector<uint64_t> results;
+        arena_.execute([&] {
+            updateWindow();
+            if (options_.scalarReference)
+                results = detail::executeReference(list, window_, triangles_, params_, view_.depth, state_, depth_,
+                                                   stats_);
+            else
+                results = executeFast(list);
+        });
+        return results;
+    }
+
+    DepthImage readDepth() override {
+        DepthImage img;
+        if (!haveView_) return img;
+        img.width = view_.width;
+        img.height = view_.height;
+        img.format = view_.depth;
+        img.values = depth_;
+        return img;
+    }
+
+private:
+    void updateWindow() {
+        if (windowValid_) return;
+        window_.resize(positions_.size());
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, positions_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t v = r.begin(); v != r.end(); ++v) {
+                const Vec3d w = view_.toWindow(positions_[v]);
+                window_[v] = {w.x(), w.y(), w.z()};
+            }
+        });
+        windowValid_ = true;
+    }
+
+    // Step 3: set up the union of the drawn ranges, once per triangle.
+    void setupDrawn(const CommandList& list) {
+        ranges_.clear();
+        for (const Command& c : list.commands())
+            if (c.op == Command::Op::Draw && c.count > 0) ranges_.push_back({c.first, c.first + c.count});
+        std::sort(ranges_.begin(), ranges_.end());
+        chunks_.clear();
+        uint32_t curB = 0, curE = 0;
+        bool open = false;
+        auto flush = [&] {
+            for (uint32_t b = curB; b < curE; b += kSetupChunk) chunks_.push_back({b, std::min(curE, b + kSetupChunk)});
+        };
+        for (const auto& r : ranges_) {
+            if (open && r[0] <= curE) {
+                curE = std::max(curE, r[1]);
+            } else {
+                if (open) flush();
+                curB = r[0];
+                curE = r[1];
+                open = true;
+            }
+        }
+        if (open) flush();
+
+        if (triFlags_.size() < triangles_.size()) {
+            triFlags_.resize(triangles_.size());
+            recBegin_.resize(triangles_.size());
+            recEnd_.resize(triangles_.size());
+        }
+        if (chunkRecords_.size() < chunks_.size()) {
+            chunkRecords_.resize(chunks_.size());
+            chunkTiles_.resize(chunks_.size());
+        }
+        const int ts = options_.tileSize;
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks_.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+            SnappedTri sub[detail::kMaxSubTriangles];
+            for (size_t ci = r.begin(); ci != r.end(); ++ci) {
+                std::vector<EdgeTri>& recs = chunkRecords_[ci];
+                std::vector<TileRect>& tiles = chunkTiles_[ci];
+                recs.clear();
+                tiles.clear();
+                for (uint32_t t = chunks_[ci][0]; t < chunks_[ci][1]; ++t) {
+                    const Triangle& tri = triangles_[t];
+                    int n = 0;
+                    triFlags_[t] = detail::setupTriangle(window_[tri[0]], window_[tri[1]], window_[tri[2]], params_, sub, n);
+                    recBegin_[t] = uint32_t(recs.size());
+                    for (int s = 0; s < n; ++s) {
+                        EdgeTri e;
+                        if (!detail::makeEdgeTri(sub[s], params_, e)) continue;
+                        recs.push_back(e);
+                        tiles.push_back(TileRect{uint16_t(e.x0 / ts), uint16_t(e.y0 / ts), uint16_t(e.x1 / ts),
+                                                 uint16_t(e.y1 / ts)});
+                    }
+                    recEnd_[t] = uint32_t(recs.size());
+                }
+            }
+        });
+        chunkOffset_.resize(chunks_.size() + 1);
+        chunkOffset_[0] = 0;
+        for (size_t ci = 0; ci < chunks_.size(); ++ci) chunkOffset_[ci + 1] = chunkOffset_[ci] + chunkRecords_[ci].size();
+        const size_t total = chunkOffset_.back();
+        CULLIDE_CHECK(total < size_t(UINT32_MAX), "too many triangle records for 32-bit indices");
+        records_.resize(total);
+        recTiles_.resize(total);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks_.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t ci = r.begin(); ci != r.end(); ++ci) {
+                const uint32_t off = uint32_t(chunkOffset_[ci]);
+                std::copy(chunkRecords_[ci].begin(), chunkRecords_[ci].end(), records_.begin() + off);
+                std::copy(chunkTiles_[ci].begin(), chunkTiles_[ci].end(), recTiles_.begin() + off);
+                for (uint32_t t = chunks_[ci][0]; t < chunks_[ci][1]; ++t) {
+                    recBegin_[t] += off;
+                    recEnd_[t] += off;
+                }
+            }
+        });
+    }
+
+    // Generic CSR binning of `n` items to tiles, each tile's list in item order. `rectOf(i)` gives
+    // item i's tile rectangle. Deterministic for any chunking.
+    template <typename RectOf>
+    void binToTiles(size_t n, RectOf rectOf, std::vector<uint32_t>& start, std::vector<uint32_t>& items) {
+        const size_t tiles = size_t(tilesX_) * size_t(tilesY_);
+        const size_t nChunks = std::clamp<size_t>((n + kBinChunk - 1) / kBinChunk, 1, kMaxBinChunks);
+        const size_t per = (n + nChunks - 1) / nChunks;
+        binCounts_.assign(nChunks * tiles, 0);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, nChunks, 1), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t c = r.begin(); c != r.end(); ++c) {
+                uint32_t* counts = binCounts_.data() + c * tiles;
+                for (size_t i = c * per; i < std::min(n, (c + 1) * per); ++i) {
+                    const TileRect t = rectOf(i);
+                    for (int ty = t.ty0; ty <= t.ty1; ++ty)
+                        for (int tx = t.tx0; tx <= t.tx1; ++tx) ++counts[size_t(ty) * size_t(tilesX_) + size_t(tx)];
+                }
+            }
+        });
+        start.resize(tiles + 1);
+        uint64_t running = 0;
+        for (size_t tile = 0; tile < tiles; ++tile) {
+            start[tile] = uint32_t(running);
+            for (size_t c = 0; c < nChunks; ++c) {
+                const uint32_t cnt = binCounts_[c * tiles + tile];
+                binCounts_[c * tiles + tile] = uint32_t(running);  // becomes the chunk's write cursor
+                running += cnt;
+            }
+        }
+        CULLIDE_CHECK(running < uint64_t(UINT32_MAX), "too many tile entries for 32-bit indices");
+        start[tiles] = uint32_t(running);
+        items.resize(running);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, nChunks, 1), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t c = r.begin(); c != r.end(); ++c) {
+                uint32_t* cursor = binCounts_.data() + c * tiles;
+                for (size_t i = c * per; i < std::min(n, (c + 1) * per); ++i) {
+                    const TileRect t = rectOf(i);
+                    for (int ty = t.ty0; ty <= t.ty1; ++ty)
+                        for (int tx = t.tx0; tx <= t.tx1; ++tx)
+                            items[cursor[size_t(ty) * size_t(tilesX_) + size_t(tx)]++] = uint32_t(i);
+                }
+            }
+        });
+    }
+
+    std::vector<uint64_t> executeFast(const CommandList& list) {
+        setupDrawn(list);
+        binToTiles(records_.size(), [&](size_t i) { return recTiles_[i]; }, tileRecStart_, tileRecs_);
+
+        // Step 5: events with their state.
+        events_.clear();
+        std::vector<QueryKind> kinds(list.queryCount());
+        int32_t query = -1, nextQuery = 0;
+        const TileRect all{0, 0, uint16_t(tilesX_ - 1), uint16_t(tilesY_ - 1)};
+        for (const Command& c : list.commands()) {
+            switch (c.op) {
+                case Command::Op::Clear: {
+                    Event e;
+                    e.clear = true;
+                    e.clearValue = encodeDepth(c.clearDepth, view_.depth);
+                    e.tiles = all;
+                    events_.push_back(e);
+                    break;
+                }
+                case Command::Op::SetDepthFunc: state_.func = c.func; break;
+                case Command::Op::SetDepthMask: state_.mask = c.mask; break;
+                case Command::Op::BeginQuery:
+                    query = nextQuery++;
+                    kinds[size_t(query)] = c.queryKind;
+                    break;
+                case Command::Op::EndQuery: query = -1; break;
+                case Command::Op::Draw: {
+                    ++stats_.draws;
+                    stats_.triangles += c.count;
+                    if (c.count == 0) break;
+                    Event e;
+                    e.func = state_.func;
+                    e.mask = state_.mask;
+                    e.query = query;
+                    e.first = c.first;
+                    e.count = c.count;
+                    e.recBegin = recBegin_[c.first];
+                    e.recEnd = recEnd_[c.first + c.count - 1];
+                    events_.push_back(e);
+                    break;
+                }
+            }
+        }
+        // Tile rectangles of the draws and their setup statistics, O(triangles drawn).
+        eventStats_.assign(events_.size(), {0, 0, 0});
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, events_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t k = r.begin(); k != r.end(); ++k) {
+                Event& e = events_[k];
+                if (e.clear) continue;
+                int tx0 = tilesX_, ty0 = tilesY_, tx1 = -1, ty1 = -1;
+                for (uint32_t i = e.recBegin; i < e.recEnd; ++i) {
+                    const TileRect& t = recTiles_[i];
+                    tx0 = std::min<int>(tx0, t.tx0);
+                    ty0 = std::min<int>(ty0, t.ty0);
+                    tx1 = std::max<int>(tx1, t.tx1);
+                    ty1 = std::max<int>(ty1, t.ty1);
+                }
+                e.tiles = tx1 < 0 ? TileRect{1, 1, 0, 0} : TileRect{uint16_t(tx0), uint16_t(ty0), uint16_t(tx1), uint16_t(ty1)};
+                std::array<uint32_t, 3>& s = eventStats_[k];
+                for (uint32_t t = e.first; t < e.first + e.count; ++t) {
+                    const uint8_t f = triFlags_[t];
+                    s[0] += (f & detail::kRejected) ? 1 : 0;
+                    s[1] += (f & detail::kClipped) ? 1 : 0;
+                    s[2] += (f & detail::kZeroArea) ? 1 : 0;
+                }
+            }
+        });
+        for (const auto& s : eventStats_) {
+            stats_.rejected += s[0];
+            stats_.clipped += s[1];
+            stats_.zeroArea += s[2];
+        }
+        binToTiles(events_.size(), [&](size_t i) { return events_[i].tiles; }, tileEvStart_, tileEvs_);
+
+        // Step 6: one task per tile.
+        const size_t tiles = size_t(tilesX_) * size_t(tilesY_);
+        const bool isFloat = view_.depth.kind == DepthFormat::Kind::Float32;
+        const std::array<RasterFn, 8> table = isFloat ? rasterTable<true>() : rasterTable<false>();
+        const int bits = view_.depth.bits, ts = options_.tileSize, W = view_.width, H = view_.height;
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles, 1), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t tile = r.begin(); tile != r.end(); ++tile) {
+                TileOut& out = tileOut_[tile];
+                out.queries.clear();
+                out.fragments = out.passed = 0;
+                const int bx0 = int(tile % size_t(tilesX_)) * ts, by0 = int(tile / size_t(tilesX_)) * ts;
+                const int bx1 = std::min(bx0 + ts, W) - 1, by1 = std::min(by0 + ts, H) - 1;
+                const uint32_t* recs = tileRecs_.data() + tileRecStart_[tile];
+                const size_t nrecs = tileRecStart_[tile + 1] - tileRecStart_[tile];
+                size_t hint = 0;
+                for (uint32_t k = tileEvStart_[tile]; k < tileEvStart_[tile + 1]; ++k) {
+                    const Event& e = events_[tileEvs_[k]];
+                    if (e.clear) {
+                        for (int j = by0; j <= by1; ++j)
+                            std::fill_n(depth_.data() + size_t(j) * size_t(W) + size_t(bx0), bx1 - bx0 + 1, e.clearValue);
+                        continue;
+                    }
+                    size_t p = gallopLowerBound(recs, nrecs, hint, e.recBegin);
+                    const RasterFn fn = table[size_t(e.func)];
+                    const uint64_t before = out.passed;
+                    for (; p < nrecs && recs[p] < e.recEnd; ++p)
+                        fn(records_[recs[p]], bx0, by0, bx1, by1, depth_.data(), size_t(W), e.mask, bits, out.fragments,
+                           out.passed);
+                    hint = p;
+                    const uint64_t n = out.passed - before;
+                    if (e.query >= 0 && n > 0) {
+                        if (!out.queries.empty() && out.queries.back().query == uint32_t(e.query))
+                            out.queries.back().count += n;
+                        else
+                            out.queries.push_back({uint32_t(e.query), n});
+                    }
+                }
+            }
+        });
+        (void)H;
+
+        // Step 7: sum.
+        std::vector<uint64_t> results(list.queryCount(), 0);
+        for (const TileOut& out : tileOut_) {
+            for (const QueryCount& q : out.queries) results[q.query] += q.count;
+            stats_.fragments += out.fragments;
+            stats_.passed += out.passed;
+        }
+        for (size_t q = 0; q < results.size(); ++q)
+            if (kinds[q] == QueryKind::AnySamplesPassed) results[q] = results[q] > 0 ? 1 : 0;
+        return results;
+    }
+
+    CpuBackendOptions options_;
+    tbb::task_arena arena_;
+    std::vector<Vec3f> positions_;
+    std::vector<Triangle> triangles_;
+    OrthoView view_;
+    bool haveView_ = false;
+    SetupParams params_;
+    std::vector<WinVertex> window_;
+    bool windowValid_ = false;
+    std::vector<uint32_t> depth_;
+    detail::PipelineState state_;
+    RasterStats stats_;
+
+    // Fast-path scratch, reused across lists (capacity kept).
+    int tilesX_ = 0, tilesY_ = 0;
+    std::vector<std::array<uint32_t, 2>> ranges_, chunks_;
+    std::vector<uint8_t> triFlags_;
+    std::vector<uint32_t> recBegin_, recEnd_;
+    std::vector<std::vector<EdgeTri>> chunkRecords_;
+    std::vector<std::vector<TileRect>> chunkTiles_;
+    std::vector<size_t> chunkOffset_;
+    std::vector<EdgeTri> records_;
+    std::vector<TileRect> recTiles_;
+    std::vector<uint32_t> binCounts_;
+    std::vector<uint32_t> tileRecStart_, tileRecs_;
+    std::vector<Event> events_;
+    std::vector<std::array<uint32_t, 3>> eventStats_;
+    std::vector<uint32_t> tileEvStart_, tileEvs_;
+    std::vector<TileOut> tileOut_;
+};
+
+}  // namespace
+
+std::unique_ptr<CpuBackend> makeCpuBackend(const CpuBackendOptions& options) {
+    if (options.subpixelBits < kMinSubpixelBits || options.subpixelBits > kMaxSubpixelBits)
+        throw InputError("cpu backend options", "subpixel bits must be " + std::to_string(kMinSubpixelBits) + ".." +
+                                                    std::to_string(kMaxSubpixelBits) + ", got " +
+                                                    std::to_string(options.subpixelBits));
+    if (options.threads < 0 || options.threads > 1024)
+        throw InputError("cpu backend options", "threads must be 0 (default) to 1024, got " + std::to_string(options.threads));
+    if (options.tileSize < 8 || options.tileSize > 1024)
+        throw InputError("cpu backend options", "tile size must be 8..1024 pixels, got " + std::to_string(options.tileSize));
+    if (options.fillRule != FillRule::BottomLeft && options.fillRule != FillRule::TopLeft)
+        throw InputError("cpu backend options", "unknown fill rule");
+    return std::make_unique<CpuBackendImpl>(options);
+}
+
+}  // namespace cullide::raster

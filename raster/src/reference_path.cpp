@@ -1,0 +1,79 @@
+// The scalar reference path: obviously correct, one thread, no tiling, no bounding boxes.
+// It shares triangle setup (clipping, snapping, depth plane: triangle_setup.cpp) and the rules of
+// cullide/raster/rules.h with the fast path, and nothing else: coverage is decided here from the
+// snapped vertices directly, E_k(p) = (v[k+1] - v[k]) x (p - v[k]) at every pixel centre p.
+#include "reference_path.h"
+
+namespace cullide::raster::detail {
+
+namespace {
+
+bool covers(const SnappedTri& t, int64_t px, int64_t py, FillRule rule) {
+    for (int k = 0; k < 3; ++k) {
+        const int n = (k + 1) % 3;
+        const int64_t dx = t.x[n] - t.x[k], dy = t.y[n] - t.y[k];
+        const int64_t e = dx * (py - t.y[k]) - dy * (px - t.x[k]);
+        if (e < 0 || (e == 0 && !isInclusiveEdge(rule, dx, dy))) return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+std::vector<uint64_t> executeReference(const CommandList& list, std::span<const WinVertex> window,
+                                       std::span<const Triangle> triangles, const SetupParams& params,
+                                       const DepthFormat& format, PipelineState& state, std::vector<uint32_t>& depth,
+                                       RasterStats& stats) {
+    std::vector<uint64_t> results(list.queryCount(), 0);
+    std::vector<QueryKind> kinds(list.queryCount());
+    int64_t query = -1;
+    uint32_t nextQuery = 0;
+    const int W = params.width, H = params.height, S = params.subpixelBits;
+    const int64_t one = int64_t(1) << S, half = one >> 1;
+    SnappedTri sub[kMaxSubTriangles];
+    for (const Command& c : list.commands()) {
+        switch (c.op) {
+            case Command::Op::Clear: std::fill(depth.begin(), depth.end(), encodeDepth(c.clearDepth, format)); break;
+            case Command::Op::SetDepthFunc: state.func = c.func; break;
+            case Command::Op::SetDepthMask: state.mask = c.mask; break;
+            case Command::Op::BeginQuery:
+                query = nextQuery++;
+                kinds[size_t(query)] = c.queryKind;
+                break;
+            case Command::Op::EndQuery: query = -1; break;
+            case Command::Op::Draw:
+                ++stats.draws;
+                for (uint32_t t = c.first; t < c.first + c.count; ++t) {
+                    ++stats.triangles;
+                    const Triangle& tri = triangles[t];
+                    int n = 0;
+                    const uint8_t flags = setupTriangle(window[tri[0]], window[tri[1]], window[tri[2]], params, sub, n);
+                    stats.rejected += (flags & kRejected) ? 1 : 0;
+                    stats.clipped += (flags & kClipped) ? 1 : 0;
+                    stats.zeroArea += (flags & kZeroArea) ? 1 : 0;
+                    for (int s = 0; s < n; ++s) {
+                        for (int j = 0; j < H; ++j) {
+                            const double row = sub[s].plane.row(j);
+                            for (int i = 0; i < W; ++i) {
+                                if (!covers(sub[s], int64_t(i) * one + half, int64_t(j) * one + half, params.fillRule))
+                                    continue;
+                                ++stats.fragments;
+                                const uint32_t incoming = encodeDepth(sub[s].plane.at(row, i), format);
+                                uint32_t& stored = depth[size_t(j) * size_t(W) + size_t(i)];
+                                if (!depthTest(state.func, incoming, stored)) continue;
+                                ++stats.passed;
+                                if (query >= 0) ++results[size_t(query)];
+                                if (state.mask) stored = incoming;
+                            }
+                        }
+                    }
+                }
+                break;
+        }
+    }
+    for (size_t q = 0; q < results.size(); ++q)
+        if (kinds[q] == QueryKind::AnySamplesPassed) results[q] = results[q] > 0 ? 1 : 0;
+    return results;
+}
+
+}  // namespace cullide::raster::detail

@@ -1,0 +1,173 @@
+// Triangle setup: clipping in double, snapping to the subpixel grid, the depth plane.
+// Rules 2, 3 and 6 of cullide/raster/rules.h; the derivations are there.
+//
+// References: GL 4.6 §13.5 (clipping), §14.6.1 (polygon rasterization), eq. 14.10 (depth
+// interpolation); Mesa llvmpipe lp_setup_tri.c (snapping, edge functions, float depth plane).
+#include "triangle_setup.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cullide::raster::detail {
+
+namespace {
+
+constexpr int kMaxPolygon = 9;  // a triangle clipped by six planes has at most 3 + 6 vertices
+
+// Signed distance to one clip plane; inside when >= 0.
+struct ClipPlane {
+    int axis;      // 0: x, 1: y, 2: z
+    double sign;   // +1: coordinate >= bound; -1: coordinate <= bound
+    double bound;
+    double distance(const WinVertex& v) const {
+        const double c = axis == 0 ? v.x : axis == 1 ? v.y : v.z;
+        return sign > 0 ? c - bound : bound - c;
+    }
+};
+
+// Point on the segment from the inside vertex `in` towards the outside vertex `out`. Always
+// computed in that direction so that a shared edge gives the same point in both triangles.
+WinVertex intersect(const WinVertex& in, double dIn, const WinVertex& out, double dOut) {
+    const double t = dIn / (dIn - dOut);
+    return {in.x + t * (out.x - in.x), in.y + t * (out.y - in.y), in.z + t * (out.z - in.z)};
+}
+
+// Sutherland-Hodgman against one plane; returns the new vertex count.
+int clipPolygon(const WinVertex* src, int n, const ClipPlane& plane, WinVertex* dst) {
+    int m = 0;
+    for (int k = 0; k < n; ++k) {
+        const WinVertex& a = src[k];
+        const WinVertex& b = src[(k + 1) % n];
+        const double da = plane.distance(a), db = plane.distance(b);
+        const bool aIn = da >= 0, bIn = db >= 0;
+        if (aIn) dst[m++] = a;
+        if (aIn && !bIn) dst[m++] = intersect(a, da, b, db);
+        if (!aIn && bIn) dst[m++] = intersect(b, db, a, da);
+    }
+    return m;
+}
+
+bool finite(const WinVertex& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// The plane through three window vertices; false when they are collinear in x, y (or the
+// gradients overflow).
+bool planeFrom(const WinVertex& p0, const WinVertex& p1, const WinVertex& p2, DepthPlane& plane) {
+    const double x1 = p1.x - p0.x, y1 = p1.y - p0.y, z1 = p1.z - p0.z;
+    const double x2 = p2.x - p0.x, y2 = p2.y - p0.y, z2 = p2.z - p0.z;
+    const double det = x1 * y2 - x2 * y1;
+    if (det == 0.0 || !std::isfinite(det)) return false;
+    plane.x0 = p0.x;
+    plane.y0 = p0.y;
+    plane.z0 = p0.z;
+    plane.dzdx = (z1 * y2 - z2 * y1) / det;
+    plane.dzdy = (x1 * z2 - x2 * z1) / det;
+    return std::isfinite(plane.dzdx) && std::isfinite(plane.dzdy);
+}
+
+}  // namespace
+
+uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params,
+                      SnappedTri out[kMaxSubTriangles], int& count) {
+    count = 0;
+    if (!finite(v0) || !finite(v1) || !finite(v2)) return kRejected;
+
+    // Trivial rejection: all three vertices beyond one side of the viewport or the depth range.
+    // Beyond x < 0 every snapped x is <= 0, left of every centre (>= 1/2); likewise for the others.
+    const double W = params.width, H = params.height;
+    if ((v0.x < 0 && v1.x < 0 && v2.x < 0) || (v0.x > W && v1.x > W && v2.x > W) ||
+        (v0.y < 0 && v1.y < 0 && v2.y < 0) || (v0.y > H && v1.y > H && v2.y > H) ||
+        (v0.z < 0 && v1.z < 0 && v2.z < 0) || (v0.z > 1 && v1.z > 1 && v2.z > 1))
+        return kRejected;
+
+    // Depth plane of the whole (unclipped, unsnapped) triangle.
+    DepthPlane plane;
+    const bool havePlane = planeFrom(v0, v1, v2, plane);
+
+    // Clipping against the depth range and the guard band, only where needed.
+    const double G = guardBandPixels(params.subpixelBits);
+    WinVertex polyA[kMaxPolygon] = {v0, v1, v2};
+    WinVertex polyB[kMaxPolygon];
+    WinVertex* poly = polyA;
+    int n = 3;
+    uint8_t flags = 0;
+    auto outside = [&](const WinVertex& v) {
+        return v.z < 0 || v.z > 1 || v.x < -G || v.x > G || v.y < -G || v.y > G;
+    };
+    if (outside(v0) || outside(v1) || outside(v2)) {
+        flags |= kClipped;
+        const ClipPlane planes[6] = {{2, +1, 0.0}, {2, -1, 1.0}, {0, +1, -G}, {0, -1, G}, {1, +1, -G}, {1, -1, G}};
+        WinVertex* other = polyB;
+        for (const ClipPlane& cp : planes) {
+            n = clipPolygon(poly, n, cp, other);
+            std::swap(poly, other);
+            if (n < 3) return flags | kRejected;
+        }
+    }
+
+    // Snap every polygon vertex once, then fan from vertex 0.
+    const int S = params.subpixelBits;
+    int64_t sx[kMaxPolygon], sy[kMaxPolygon];
+    for (int k = 0; k < n; ++k) {
+        sx[k] = snapToFixed(poly[k].x, S);
+        sy[k] = snapToFixed(poly[k].y, S);
+    }
+    const double unit = std::ldexp(1.0, -S);
+    for (int k = 1; k + 1 < n; ++k) {
+        int i0 = 0, i1 = k, i2 = k + 1;
+        const int64_t area2 = (sx[i1] - sx[i0]) * (sy[i2] - sy[i0]) - (sx[i2] - sx[i0]) * (sy[i1] - sy[i0]);
+        if (area2 == 0) continue;  // zero area after snapping: no fragment (counted by the caller)
+        if (area2 < 0) std::swap(i1, i2);  // both windings rasterize
+        SnappedTri& t = out[count++];
+        const int idx[3] = {i0, i1, i2};
+        for (int v = 0; v < 3; ++v) {
+            t.x[v] = sx[idx[v]];
+            t.y[v] = sy[idx[v]];
+        }
+        if (havePlane) {
+            t.plane = plane;
+        } else {
+            // Collinear in double but not after snapping: the plane of the snapped sub-triangle.
+            WinVertex s[3];
+            for (int v = 0; v < 3; ++v) s[v] = {double(t.x[v]) * unit, double(t.y[v]) * unit, poly[idx[v]].z};
+            if (!planeFrom(s[0], s[1], s[2], t.plane)) t.plane = DepthPlane{s[0].x, s[0].y, s[0].z, 0.0, 0.0};
+        }
+    }
+    if (count == 0) flags |= kZeroArea;
+    return flags;
+}
+
+namespace {
+
+inline int64_t floorShift(int64_t v, int s) { return v >> s; }        // floor(v / 2^s), arithmetic shift
+inline int64_t ceilShift(int64_t v, int s) { return -((-v) >> s); }   // ceil(v / 2^s)
+
+}  // namespace
+
+bool makeEdgeTri(const SnappedTri& t, const SetupParams& params, EdgeTri& out) {
+    const int S = params.subpixelBits;
+    const int64_t one = int64_t(1) << S, half = one >> 1;
+    // Bounding box of the covered centres: centre i*2^S + half within [min, max].
+    const int64_t minx = std::min({t.x[0], t.x[1], t.x[2]}), maxx = std::max({t.x[0], t.x[1], t.x[2]});
+    const int64_t miny = std::min({t.y[0], t.y[1], t.y[2]}), maxy = std::max({t.y[0], t.y[1], t.y[2]});
+    const int64_t i0 = std::max<int64_t>(ceilShift(minx - half, S), 0);
+    const int64_t i1 = std::min<int64_t>(floorShift(maxx - half, S), params.width - 1);
+    const int64_t j0 = std::max<int64_t>(ceilShift(miny - half, S), 0);
+    const int64_t j1 = std::min<int64_t>(floorShift(maxy - half, S), params.height - 1);
+    if (i0 > i1 || j0 > j1) return false;
+    out.x0 = int32_t(i0);
+    out.x1 = int32_t(i1);
+    out.y0 = int32_t(j0);
+    out.y1 = int32_t(j1);
+    for (int k = 0; k < 3; ++k) {
+        const int n = (k + 1) % 3;
+        const int64_t dx = t.x[n] - t.x[k], dy = t.y[n] - t.y[k];
+        // E(p) = dx*(py - yk) - dy*(px - xk) with p = (i*2^S + half, j*2^S + half).
+        out.a[k] = -dy * one;
+        out.b[k] = dx * one;
+        out.c[k] = dx * (half - t.y[k]) - dy * (half - t.x[k]) - (isInclusiveEdge(params.fillRule, dx, dy) ? 0 : 1);
+    }
+    out.plane = t.plane;
+    return true;
+}
+
+}  // namespace cullide::raster::detail

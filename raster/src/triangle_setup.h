@@ -1,0 +1,63 @@
+// Triangle setup shared by the fast and the scalar reference paths: clipping, snapping, the depth
+// plane (rules 2, 3 and 6 of cullide/raster/rules.h). Private to raster/.
+#pragma once
+
+#include "cullide/raster/rules.h"
+
+#include <cstdint>
+
+namespace cullide::raster::detail {
+
+struct WinVertex {
+    double x, y, z;  // GL window coordinates (OrthoView::toWindow)
+};
+
+// Rule 6: z(x, y) = (z0 + dzdy*(y - y0)) + dzdx*(x - x0) at pixel centres, in this association.
+struct DepthPlane {
+    double x0 = 0, y0 = 0, z0 = 0, dzdx = 0, dzdy = 0;
+    double row(int j) const { return z0 + dzdy * ((double(j) + 0.5) - y0); }
+    double at(double rowValue, int i) const { return rowValue + dzdx * ((double(i) + 0.5) - x0); }
+};
+
+// A snapped triangle with positive area (counter-clockwise in GL window coordinates), in fixed
+// point with S subpixel bits, and the depth plane of the triangle it came from.
+struct SnappedTri {
+    int64_t x[3], y[3];
+    DepthPlane plane;
+};
+
+enum TriFlags : uint8_t {
+    kRejected = 1,  // outside the viewport or the depth range: nothing to draw
+    kClipped = 2,   // needed clipping against the depth range or the guard band
+    kZeroArea = 4,  // not rejected, but no sub-triangle with non-zero snapped area
+};
+
+struct SetupParams {
+    int subpixelBits = kDefaultSubpixelBits;
+    int width = 1, height = 1;
+    FillRule fillRule = FillRule::BottomLeft;
+};
+
+// A clipped triangle fans into at most 3 + 6 - 2 sub-triangles (six clip planes).
+inline constexpr int kMaxSubTriangles = 7;
+
+// Sets up one triangle: writes its snapped sub-triangles to out[0..count) and returns TriFlags.
+// Non-finite window coordinates count as rejected.
+uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params,
+                      SnappedTri out[kMaxSubTriangles], int& count);
+
+// The fast path's form of a snapped triangle: edge functions over pixel indices,
+// E_k(i, j) = a[k]*i + b[k]*j + c[k], with the fill rule folded into c so that the centre of
+// pixel (i, j) is covered iff all three are >= 0; and the inclusive pixel bounding box clipped to
+// the viewport.
+struct EdgeTri {
+    int64_t a[3], b[3], c[3];
+    int32_t x0, y0, x1, y1;
+    DepthPlane plane;
+};
+
+// Returns false (and leaves `out` unspecified) when the bounding box holds no pixel centre of the
+// viewport.
+bool makeEdgeTri(const SnappedTri& t, const SetupParams& params, EdgeTri& out);
+
+}  // namespace cullide::raster::detail
