@@ -1,0 +1,383 @@
+// Scene files (see scene_io.h and docs/scene-format.md).
+//
+// Parsing is strict: every key is known, every value has the documented type, every number is a
+// finite float. Transforms are composed as  T * R * S  (scale first, then rotate, then
+// translate), evaluated in double and rounded once to float. JSON is parsed by nlohmann-json with
+// a callback that refuses duplicate keys (nlohmann would silently keep the last one).
+// Writing is deterministic: keys in a fixed order, numbers as the shortest decimal that reads
+// back to the same double (every float is exactly a double), meshes as OFF (writeOff).
+#include "cullide/scene_io.h"
+
+#include "cullide/error.h"
+#include "cullide/mesh_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <numbers>
+#include <set>
+#include <unistd.h>
+
+namespace cullide {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+using OrderedJson = nlohmann::ordered_json;
+
+class SceneParser {
+public:
+    SceneParser(fs::path path) : path_(std::move(path)), src_(path_.string()), dir_(path_.parent_path()) {}
+
+    Animation parse() {
+        const Json root = parseJson(readText());
+        Animation a;
+        requireObject(root, "the top level");
+        allowKeys(root, "the top level", {"objects", "animation"});
+        const Json& objects = requireKey(root, "objects", "the top level");
+        if (!objects.is_array()) fail("'objects': expected an array, got " + typeName(objects));
+        if (objects.empty()) fail("'objects' is empty: a scene needs at least one object");
+        std::map<std::string, size_t> byName;
+        for (size_t i = 0; i < objects.size(); ++i) {
+            const std::string where = "objects[" + std::to_string(i) + "]";
+            const Json& o = objects[i];
+            requireObject(o, where);
+            allowKeys(o, where, {"name", "mesh", "transform"});
+            Object obj;
+            obj.name = requireString(requireKey(o, "name", where), where + ".name");
+            if (obj.name.empty()) fail(where + ".name is empty");
+            if (!byName.emplace(obj.name, i).second) fail(where + ": duplicate object name '" + obj.name + "'");
+            const std::string meshRef = requireString(requireKey(o, "mesh", where), where + ".mesh");
+            obj.mesh = loadReferencedMesh(meshRef, "object '" + obj.name + "'");
+            if (o.contains("transform")) obj.transform = parseTransform(o["transform"], where + ".transform");
+            a.scene.objects.push_back(std::move(obj));
+        }
+        if (root.contains("animation")) {
+            const Json& anim = root["animation"];
+            requireObject(anim, "'animation'");
+            allowKeys(anim, "'animation'", {"frames"});
+            const Json& frames = requireKey(anim, "frames", "'animation'");
+            if (!frames.is_array()) fail("animation.frames: expected an array, got " + typeName(frames));
+            for (size_t f = 0; f < frames.size(); ++f) a.frames.push_back(parseFrame(frames[f], f, a.scene, byName));
+        }
+        validateAnimation(a, src_);
+        return a;
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& cause) const { throw InputError(src_, cause); }
+
+    std::string readText() const {
+        std::error_code ec;
+        const fs::file_status st = fs::status(path_, ec);
+        if (ec || !fs::exists(st)) fail("cannot open: no such file");
+        if (fs::is_directory(st)) fail("cannot read: it is a directory, not a file");
+        std::FILE* f = std::fopen(src_.c_str(), "rb");
+        if (!f) fail(std::string("cannot open: ") + std::strerror(errno));
+        std::string data;
+        char buf[1 << 16];
+        size_t n;
+        while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) data.append(buf, n);
+        const bool failed = std::ferror(f) != 0;
+        std::fclose(f);
+        if (failed) fail("cannot read: I/O error");
+        return data;
+    }
+
+    Json parseJson(const std::string& text) const {
+        std::vector<std::set<std::string>> keys;  // one per open JSON object
+        std::string duplicate;
+        auto callback = [&](int, Json::parse_event_t event, Json& parsed) {
+            switch (event) {
+            case Json::parse_event_t::object_start: keys.emplace_back(); break;
+            case Json::parse_event_t::object_end: if (!keys.empty()) keys.pop_back(); break;
+            case Json::parse_event_t::key:
+                if (!keys.empty() && !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty())
+                    duplicate = parsed.get<std::string>();
+                break;
+            default: break;
+            }
+            return true;
+        };
+        Json j;
+        try {
+            j = Json::parse(text, callback, /*allow_exceptions=*/true, /*ignore_comments=*/false);
+        } catch (const Json::parse_error& e) {
+            // e.byte is the 1-based offset of the last character read.
+            const size_t p = std::min<size_t>(e.byte == 0 ? 0 : e.byte - 1, text.size());
+            size_t line = 1, lineStart = 0;
+            for (size_t i = 0; i < p; ++i)
+                if (text[i] == '\n') ++line, lineStart = i + 1;
+            std::string what = e.what();
+            const size_t colon = what.find(": ");
+            if (colon != std::string::npos) what = what.substr(colon + 2);
+            fail("malformed JSON at line " + std::to_string(line) + ", column " + std::to_string(p - lineStart + 1) + ": " + what);
+        } catch (const Json::exception& e) {
+            std::string what = e.what();
+            const size_t bracket = what.find("] ");
+            if (bracket != std::string::npos) what = what.substr(bracket + 2);
+            fail("malformed JSON: " + what);
+        }
+        if (!duplicate.empty()) fail("malformed JSON: duplicate key '" + duplicate + "'");
+        return j;
+    }
+
+    static std::string typeName(const Json& j) { return j.type_name(); }
+
+    void requireObject(const Json& j, const std::string& where) const {
+        if (!j.is_object()) fail(where + ": expected an object, got " + typeName(j));
+    }
+
+    const Json& requireKey(const Json& j, const char* key, const std::string& where) const {
+        const auto it = j.find(key);
+        if (it == j.end()) fail(where + ": missing key '" + key + "'");
+        return *it;
+    }
+
+    void allowKeys(const Json& j, const std::string& where, std::initializer_list<const char*> allowed) const {
+        for (const auto& [key, value] : j.items()) {
+            bool known = false;
+            for (const char* a : allowed) known |= key == a;
+            if (!known) {
+                std::string list;
+                for (const char* a : allowed) list += (list.empty() ? "'" : ", '") + std::string(a) + "'";
+                fail(where + ": unknown key '" + key + "' (expected " + list + ")");
+            }
+        }
+    }
+
+    std::string requireString(const Json& j, const std::string& where) const {
+        if (!j.is_string()) fail(where + ": expected a string, got " + typeName(j));
+        return j.get<std::string>();
+    }
+
+    double requireNumber(const Json& j, const std::string& where) const {
+        if (!j.is_number()) fail(where + ": expected a number, got " + typeName(j));
+        const double d = j.get<double>();
+        if (!std::isfinite(d) || !std::isfinite(static_cast<float>(d))) fail(where + ": " + j.dump() + " is not a finite float");
+        return d;
+    }
+
+    Eigen::Vector3d requireVec3(const Json& j, const std::string& where) const {
+        if (!j.is_array() || j.size() != 3) fail(where + ": expected an array of 3 numbers, got " + typeName(j) + (j.is_array() ? " of size " + std::to_string(j.size()) : ""));
+        return {requireNumber(j[0], where + "[0]"), requireNumber(j[1], where + "[1]"), requireNumber(j[2], where + "[2]")};
+    }
+
+    Transform parseTransform(const Json& j, const std::string& where) const {
+        requireObject(j, where);
+        allowKeys(j, where, {"translate", "rotate", "scale", "matrix"});
+        Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+        if (j.contains("matrix")) {
+            if (j.size() != 1) fail(where + ": 'matrix' cannot be combined with translate/rotate/scale");
+            const Json& rows = j["matrix"];
+            if (!rows.is_array() || rows.size() != 4) fail(where + ".matrix: expected 4 rows of 4 numbers (row-major)");
+            for (int r = 0; r < 4; ++r) {
+                const std::string rw = where + ".matrix[" + std::to_string(r) + "]";
+                if (!rows[r].is_array() || rows[r].size() != 4) fail(rw + ": expected a row of 4 numbers");
+                for (int c = 0; c < 4; ++c) m(r, c) = requireNumber(rows[r][c], rw + "[" + std::to_string(c) + "]");
+            }
+            if (m(3, 0) != 0 || m(3, 1) != 0 || m(3, 2) != 0 || m(3, 3) != 1)
+                fail(where + ".matrix: the last row must be [0, 0, 0, 1] (an affine transform)");
+        } else {
+            Eigen::Vector3d scale(1, 1, 1);
+            if (j.contains("scale")) {
+                const Json& s = j["scale"];
+                if (s.is_number()) scale.setConstant(requireNumber(s, where + ".scale"));
+                else if (s.is_array()) scale = requireVec3(s, where + ".scale");
+                else fail(where + ".scale: expected a number or an array of 3 numbers, got " + typeName(s));
+            }
+            Eigen::Matrix3d rot = Eigen::Matrix3d::Identity();
+            if (j.contains("rotate")) {
+                const Json& r = j["rotate"];
+                const std::string rw = where + ".rotate";
+                requireObject(r, rw);
+                allowKeys(r, rw, {"axis", "degrees"});
+                const Eigen::Vector3d axis = requireVec3(requireKey(r, "axis", rw), rw + ".axis");
+                const double degrees = requireNumber(requireKey(r, "degrees", rw), rw + ".degrees");
+                if (axis.norm() == 0) fail(rw + ".axis is the zero vector");
+                rot = Eigen::AngleAxisd(degrees * std::numbers::pi / 180.0, axis.normalized()).toRotationMatrix();
+            }
+            Eigen::Vector3d t = Eigen::Vector3d::Zero();
+            if (j.contains("translate")) t = requireVec3(j["translate"], where + ".translate");
+            m.topLeftCorner<3, 3>() = rot * scale.asDiagonal();
+            m.topRightCorner<3, 1>() = t;
+        }
+        Transform out;
+        out.matrix() = m.cast<float>();
+        if (!out.matrix().allFinite()) fail(where + ": the transform is not finite in float");
+        return out;
+    }
+
+    Mesh loadReferencedMesh(const std::string& ref, const std::string& what) const {
+        const fs::path p = fs::path(ref).is_absolute() ? fs::path(ref) : dir_ / ref;
+        try {
+            return loadMesh(p);
+        } catch (const InputError& e) {
+            fail(what + ": " + e.what());
+        }
+    }
+
+    Frame parseFrame(const Json& j, size_t f, const Scene& scene, const std::map<std::string, size_t>& byName) const {
+        const std::string where = "animation.frames[" + std::to_string(f) + "]";
+        requireObject(j, where);
+        allowKeys(j, where, {"objects"});
+        Frame frame;
+        if (!j.contains("objects")) return frame;
+        const Json& objs = j["objects"];
+        requireObject(objs, where + ".objects");
+        if (objs.empty()) return frame;
+        frame.poses.resize(scene.objects.size());
+        for (const auto& [name, pose] : objs.items()) {
+            const auto it = byName.find(name);
+            if (it == byName.end()) fail(where + ": unknown object '" + name + "' (not in 'objects')");
+            const std::string pw = where + ".objects." + name;
+            requireObject(pose, pw);
+            allowKeys(pose, pw, {"transform", "positions"});
+            ObjectPose& p = frame.poses[it->second];
+            if (pose.contains("transform")) p.transform = parseTransform(pose["transform"], pw + ".transform");
+            if (pose.contains("positions")) {
+                const std::string ref = requireString(pose["positions"], pw + ".positions");
+                Mesh m = loadReferencedMesh(ref, pw + ".positions");
+                const size_t expected = scene.objects[it->second].mesh.positions.size();
+                if (m.positions.size() != expected)
+                    fail(pw + ".positions: '" + ref + "' has " + std::to_string(m.positions.size()) + " vertices, but object '" + name +
+                         "' has " + std::to_string(expected) + " (wrong position count)");
+                p.positions = std::move(m.positions);
+            }
+        }
+        return frame;
+    }
+
+    fs::path path_;
+    std::string src_;
+    fs::path dir_;
+};
+
+bool isMeshExtension(const fs::path& p) {
+    try {
+        (void)meshFormatFromPath(p);
+        return true;
+    } catch (const InputError&) {
+        return false;
+    }
+}
+
+void writeTextAtomically(const fs::path& path, const std::string& text) {
+    static std::atomic<unsigned> counter{0};
+    const std::string src = path.string();
+    fs::path tmp = path;
+    tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+    std::FILE* f = std::fopen(tmp.string().c_str(), "wb");
+    if (!f) throw InputError(src, std::string("cannot write: ") + std::strerror(errno));
+    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+    const bool closed = std::fclose(f) == 0;
+    std::error_code ec;
+    if (!ok || !closed) {
+        fs::remove(tmp, ec);
+        throw InputError(src, "cannot write: I/O error");
+    }
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        std::error_code ignored;
+        fs::remove(tmp, ignored);
+        throw InputError(src, "cannot write: " + ec.message());
+    }
+}
+
+OrderedJson transformJson(const Transform& t) {
+    OrderedJson rows = OrderedJson::array();
+    for (int r = 0; r < 4; ++r) {
+        OrderedJson row = OrderedJson::array();
+        for (int c = 0; c < 4; ++c) row.push_back(static_cast<double>(t.matrix()(r, c)));
+        rows.push_back(std::move(row));
+    }
+    OrderedJson j;
+    j["matrix"] = std::move(rows);
+    return j;
+}
+
+// A file-name-safe version of an object name (the index in front keeps the names unique).
+std::string safeName(const std::string& name) {
+    std::string s;
+    for (char c : name) s += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_') ? c : '_';
+    return s.substr(0, 64);
+}
+
+}  // namespace
+
+Animation loadScene(const fs::path& path) {
+    if (isMeshExtension(path)) {
+        Animation a;
+        Object o;
+        o.name = path.stem().string();
+        o.mesh = loadMesh(path);
+        a.scene.objects.push_back(std::move(o));
+        return a;
+    }
+    std::string ext = path.extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".json")
+        throw InputError(path.string(), "unknown scene format '" + ext + "' (expected .json, or a mesh file: .obj .off .ply .stl)");
+    return SceneParser(path).parse();
+}
+
+void writeScene(const Animation& animation, const fs::path& path) {
+    validateAnimation(animation, path.string());
+    std::set<std::string> names;
+    for (const Object& o : animation.scene.objects)
+        if (o.name.empty() || !names.insert(o.name).second)
+            throw InputError(path.string(), "cannot write a scene whose object names are empty or not unique ('" + o.name + "')");
+    const fs::path dir = path.parent_path();
+    const std::string stem = path.stem().string();
+    OrderedJson root;
+    OrderedJson objects = OrderedJson::array();
+    std::vector<std::string> bases;
+    for (size_t i = 0; i < animation.scene.objects.size(); ++i) {
+        const Object& o = animation.scene.objects[i];
+        const std::string base = stem + "_" + std::to_string(i) + "_" + safeName(o.name);
+        bases.push_back(base);
+        writeOff(o.mesh, dir / (base + ".off"));
+        OrderedJson jo;
+        jo["name"] = o.name;
+        jo["mesh"] = base + ".off";
+        if (o.transform.matrix() != Eigen::Matrix4f::Identity()) jo["transform"] = transformJson(o.transform);
+        objects.push_back(std::move(jo));
+    }
+    root["objects"] = std::move(objects);
+    if (!animation.frames.empty()) {
+        OrderedJson frames = OrderedJson::array();
+        for (size_t f = 0; f < animation.frames.size(); ++f) {
+            const Frame& fr = animation.frames[f];
+            OrderedJson poses = OrderedJson::object();
+            for (size_t i = 0; i < fr.poses.size(); ++i) {
+                const ObjectPose& p = fr.poses[i];
+                if (!p.transform && !p.positions) continue;
+                OrderedJson jp;
+                if (p.transform) jp["transform"] = transformJson(*p.transform);
+                if (p.positions) {
+                    char num[32];
+                    std::snprintf(num, sizeof num, "%04zu", f);
+                    const std::string file = bases[i] + "_f" + num + ".off";
+                    Mesh m;
+                    m.positions = *p.positions;
+                    m.triangles = animation.scene.objects[i].mesh.triangles;
+                    writeOff(m, dir / file);
+                    jp["positions"] = file;
+                }
+                poses[animation.scene.objects[i].name] = std::move(jp);
+            }
+            OrderedJson jf = OrderedJson::object();
+            if (!poses.empty()) jf["objects"] = std::move(poses);
+            frames.push_back(std::move(jf));
+        }
+        root["animation"]["frames"] = std::move(frames);
+    }
+    writeTextAtomically(path, root.dump(2) + "\n");
+}
+
+}  // namespace cullide

@@ -1,0 +1,143 @@
+// Tests for scene_io: the JSON scene format (docs/scene-format.md), its errors, and writeScene.
+#include "cullide/error.h"
+#include "cullide/mesh_io.h"
+#include "cullide/scene_io.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace cullide {
+namespace {
+
+using test::TempDir;
+using test::testData;
+
+std::string slurp(const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+// Trap: mesh paths resolved against the working folder instead of the scene file's; transforms
+// composed in another order than T * R * S; frames applied to the wrong object.
+TEST(SceneIo, LoadsObjectsTransformsAndFrames) {
+    const Animation a = loadScene(testData("good/scene.json"));
+    ASSERT_EQ(a.scene.objects.size(), 3u);
+    EXPECT_EQ(a.scene.objects[0].name, "polys");
+    EXPECT_EQ(a.scene.objects[1].name, "cube");
+    EXPECT_EQ(a.scene.objects[2].name, "matrixed");
+    EXPECT_EQ(a.scene.objects[0].mesh, loadMesh(testData("good/polys.off")));
+    EXPECT_EQ(a.scene.objects[1].mesh.vertexCount(), 8u);
+    // polys: scale 2, then 90 degrees about z, then translate (1,2,3): (1,0,0) -> (2,0,0) -> (0,2,0) -> (1,4,3).
+    const Vec3f p = applyTransform(a.scene.objects[0].transform, Vec3f(1, 0, 0));
+    EXPECT_NEAR(p.x(), 1, 1e-6);
+    EXPECT_NEAR(p.y(), 4, 1e-6);
+    EXPECT_NEAR(p.z(), 3, 1e-6);
+    EXPECT_EQ(a.scene.objects[2].transform.translation(), Vec3f(5, 0, 0));
+    EXPECT_TRUE(a.scene.objects[1].transform.matrix().isIdentity(0));
+
+    ASSERT_EQ(a.frameCount(), 3u);
+    EXPECT_TRUE(a.frames[0].poses.empty());
+    const Mesh moved = loadMesh(testData("good/polys_moved.off"));
+    const Scene f1 = a.sceneAt(1);
+    EXPECT_EQ(f1.objects[0].mesh.positions, moved.positions);
+    EXPECT_EQ(f1.objects[0].transform.matrix(), a.scene.objects[0].transform.matrix());
+    const Scene f2 = a.sceneAt(2);
+    EXPECT_EQ(f2.objects[1].transform.translation(), Vec3f(0, 0, 1));
+    EXPECT_EQ(applyTransform(f2.objects[0].transform, Vec3f(1, 1, 1)), Vec3f(1, 2, 3));
+    EXPECT_EQ(f2.objects[2].transform.matrix(), a.scene.objects[2].transform.matrix());
+}
+
+// Trap: a mesh path given where a scene is expected must work (one object named after the file).
+TEST(SceneIo, PlainMeshFileIsAOneObjectScene) {
+    const Animation a = loadScene(testData("good/polys_binary.ply"));
+    ASSERT_EQ(a.scene.objects.size(), 1u);
+    EXPECT_EQ(a.scene.objects[0].name, "polys_binary");
+    EXPECT_EQ(a.scene.objects[0].mesh, loadMesh(testData("good/polys_binary.ply")));
+    EXPECT_EQ(a.frameCount(), 1u);
+}
+
+struct BadScene {
+    const char* file;
+    const char* cause;
+};
+
+// Trap: errors that do not name the scene file, that point nowhere (malformed JSON without line
+// and column), or input accepted silently (unknown keys, duplicate keys that nlohmann would
+// collapse, duplicate names, frames naming unknown objects, wrong position counts).
+class SceneIoBad : public ::testing::TestWithParam<BadScene> {};
+
+TEST_P(SceneIoBad, ThrowsInputErrorNamingSceneAndCause) {
+    const std::string path = testData(GetParam().file);
+    try {
+        (void)loadScene(path);
+        FAIL() << "loaded " << path;
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(what.rfind(path + ": ", 0), 0u) << what;
+        EXPECT_NE(what.find(GetParam().cause), std::string::npos) << what;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    AllClasses, SceneIoBad,
+    ::testing::Values(BadScene{"bad/malformed.json", "malformed JSON at line 3, column 47"},
+                      BadScene{"bad/missing_key.json", "objects[0]: missing key 'mesh'"},
+                      BadScene{"bad/wrong_type.json", "objects[0].transform.scale: expected a number or an array of 3 numbers, got string"},
+                      BadScene{"bad/unknown_key.json", "unknown key 'colour'"},
+                      BadScene{"bad/duplicate_name.json", "duplicate object name 'a'"},
+                      BadScene{"bad/duplicate_key.json", "duplicate key 'name'"},
+                      BadScene{"bad/unknown_object_in_frame.json", "unknown object 'b'"},
+                      BadScene{"bad/wrong_position_count.json", "has 8 vertices, but object 'a' has 7 (wrong position count)"},
+                      BadScene{"bad/missing_mesh.json", "no_such_mesh.off: cannot open: no such file"},
+                      BadScene{"bad/nonfinite_transform.json", "is not a finite float"},
+                      BadScene{"bad/does_not_exist.json", "no such file"},
+                      BadScene{"bad/unknown_extension.xyz", "unknown scene format"},
+                      BadScene{"bad/nan.off", "non-finite"}));
+
+// Trap: writeScene output that does not load back to the same animation (bit for bit: meshes,
+// transforms, per-frame positions), or whose bytes differ between two writes.
+TEST(SceneIo, WriteThenLoadRoundTripsAndIsDeterministic) {
+    const Animation a = loadScene(testData("good/scene.json"));
+    TempDir d1, d2;
+    writeScene(a, d1 / "s.json");
+    writeScene(a, d2 / "s.json");
+    const Animation b = loadScene(d1 / "s.json");
+    ASSERT_EQ(b.scene.objects.size(), a.scene.objects.size());
+    ASSERT_EQ(b.frameCount(), a.frameCount());
+    for (size_t f = 0; f < a.frameCount(); ++f) {
+        const Scene sa = a.sceneAt(f), sb = b.sceneAt(f);
+        for (size_t i = 0; i < sa.objects.size(); ++i) {
+            EXPECT_EQ(sa.objects[i].name, sb.objects[i].name);
+            EXPECT_EQ(sa.objects[i].mesh, sb.objects[i].mesh);
+            EXPECT_EQ(sa.objects[i].transform.matrix(), sb.objects[i].transform.matrix()) << "frame " << f << " object " << i;
+        }
+    }
+    size_t files = 0;
+    for (const auto& e : std::filesystem::directory_iterator(d1.path())) {
+        ++files;
+        EXPECT_EQ(slurp(e.path()), slurp(d2 / e.path().filename().string())) << e.path();
+    }
+    EXPECT_EQ(files, 1u + 3u + 2u);  // the scene, three meshes, two frame position files
+}
+
+// Trap: a failed scene write leaving a file behind, or a message without the path.
+TEST(SceneIo, FailedWriteThrowsNamingTheFile) {
+    const Animation a = loadScene(testData("good/polys.off"));
+    TempDir d;
+    const auto target = d / "missing_folder" / "s.json";
+    try {
+        writeScene(a, target);
+        FAIL();
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("missing_folder"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(target));
+}
+
+}  // namespace
+}  // namespace cullide

@@ -1,0 +1,27 @@
+// Helpers shared by the test files: where the test data is, and scratch folders.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace cullide::test {
+
+// CULLIDE_TEST_DATA_DIR "/" relative, e.g. testData("good/polys.off").
+std::string testData(const char* relative);
+
+// A fresh, empty folder under the system temp folder, removed (with its contents) on destruction.
+class TempDir {
+public:
+    TempDir();
+    ~TempDir();
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+
+    const std::filesystem::path& path() const { return path_; }
+    std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+private:
+    std::filesystem::path path_;
+};
+
+}  // namespace cullide::test
