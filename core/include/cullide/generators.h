@@ -1,9 +1,19 @@
 // The paper's scenes, generated reproducibly (`cullide make-scene`).
 //
-// Every generator is a pure function of its inputs and seed: same inputs, same bytes (no
-// unordered containers, no threads, no platform maths beyond IEEE + - * / and sqrt; random
-// numbers from std::mt19937_64 with our own distribution code, since std's distributions are
+// Every generator is a pure function of its inputs and seed: same inputs, same bytes on one
+// platform and build (no unordered containers, no threads; IEEE + - * / and sqrt in a fixed order,
+// plus std::sin/std::cos, which glibc computes deterministically; random numbers from
+// std::mt19937_64 with our own conversion to double, since std's distributions are
 // implementation-defined).
+//
+// Conventions
+//   - Generated scenes have identity object transforms; all geometry is in the positions.
+//   - An animation's frames give full per-object positions (topology never changes). The base
+//     scene (Animation::scene) is the fully deformed state, equal to the last frame for the bunny
+//     and the twist, and to the middle frame (odd frame counts) for the cows; frame 0 of the
+//     bunny and the twist is the undeformed mesh, bit for bit.
+//   - Triangle counts are "about": resampling lands within ~1% of the request, cylinders within
+//     a few percent (whole rings and sides).
 #pragma once
 
 #include "cullide/scene.h"
@@ -13,30 +23,50 @@
 namespace cullide {
 
 // 1-to-4 midpoint subdivision (each triangle -> 4; shared edges get one shared midpoint, so
-// connectivity is kept). Triangle i becomes triangles 4i..4i+3.
+// connectivity is kept). Triangle i becomes triangles 4i..4i+3: the corners at t[0], t[1], t[2],
+// then the centre triangle, all with the parent's orientation. Vertices: the originals first,
+// unchanged, then one midpoint per undirected edge, in order of first use (triangle order, edges
+// t0-t1, t1-t2, t2-t0). The mesh's indices must be in range (checked).
 Mesh subdivide(const Mesh& mesh);
 
-// Simplifies to about `targetTriangles` (meshoptimizer's meshopt_simplify; edge collapses that
-// keep the surface's appearance). Never increases the count.
+// Simplifies to about `targetTriangles` (meshoptimizer's meshopt_simplify, quadric edge collapse
+// with no error bound; where that stops more than 10% above the target, meshopt_simplifySloppy
+// also runs and the closer result wins). Never increases the count: a target at or above the
+// input's count returns the input unchanged. Unreferenced vertices are dropped, the rest keep
+// their relative order. Triangle order is meshoptimizer's.
 Mesh decimate(const Mesh& mesh, size_t targetTriangles);
 
-// Subdivides and/or decimates `mesh` to the triangle count closest to `targetTriangles`.
+// Subdivides and/or decimates `mesh` to about `targetTriangles` (> 0). Below the input's count it
+// decimates; above it, it decimates to target / 4^k (the smallest k that makes this at most the
+// input's count) and then subdivides k times: decimating a subdivided mesh folds its flat patches.
 Mesh resample(const Mesh& mesh, size_t targetTriangles);
 
 struct SceneRequest {
     size_t triangles = 5000;   // requested total triangle count (about)
     uint64_t seed = 1;
-    size_t frames = 0;         // 0: a still scene; else a deforming animation of this many frames
+    size_t frames = 0;         // 0: a still scene; else an animation of this many frames
 };
 
-// A deformed Stanford bunny with a single self-intersection area (one object).
+// A deformed Stanford bunny with a single self-intersection area (one object, "bunny"): the input
+// resampled to request.triangles, then its back ear bent down about its root so that it plunges
+// through the bunny's back. The bend is placed by fractions of the input's bounding box and
+// expects the bundled bunny's frame (data/meshes/bunny.off: Y up, facing -x); on other meshes it
+// is still a smooth deformation but need not make an intersection. Frames bend the ear from 0
+// (frame 0: the resampled bunny unchanged) to the full bend (last frame).
 Animation makeDeformedBunny(const Mesh& bunny, const SceneRequest& request);
-// Two cows merged into one object so that many self-intersections exist.
+// Two cows merged into one object ("two_cows") so that many self-intersections exist: each copy
+// resampled to request.triangles / 2 (the first copy's vertices and triangles come first), the
+// second turned 35 degrees about y and shifted so that bodies, heads and legs cross. Frames move
+// the second copy along x from clear of the first on one side to clear on the other.
 Animation makeTwoCows(const Mesh& cow, const SceneRequest& request);
-// `count` open cylinders deforming (bending) over the frames, many of them interpenetrating,
-// as in CULLIDE's many-object benchmark.
+// `count` (> 0) open cylinders ("cyl_000", ...; tubes without caps) with seeded random centres in
+// [-1, 1]^3 and random directions, so that some but far from all pairs interpenetrate; about
+// request.triangles in all. Frames bow each tube sideways (its own direction and amplitude) as
+// sin(2 pi f / frames): frame 0 is the straight still scene.
 Animation makeCylinders(size_t count, const SceneRequest& request);
-// A twist (or bend) of `base` over request.frames frames: per-frame positions.
+// A twist of `base` about the longest axis of its bounding box, through the box centre: the angle
+// varies linearly along that axis over +-45 degrees at full twist, and grows from 0 (frame 0: the
+// mesh unchanged) to full (last frame). Coordinates along the axis do not change.
 Animation makeTwistAnimation(const Mesh& base, const SceneRequest& request);
 
 }  // namespace cullide
