@@ -4,6 +4,8 @@
 
 #include "cullide/error.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <bit>
 #include <cctype>
