@@ -19,7 +19,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
+struct CliRun {
     int status = -1;
     std::string output;  // stdout and stderr together
 };
@@ -30,8 +30,8 @@ std::string quote(const std::string& s) {
     return q + "'";
 }
 
-Run cullide(const std::string& args) {
-    Run r;
+CliRun cullide(const std::string& args) {
+    CliRun r;
     const std::string cmd = quote(CULLIDE_CLI_PATH) + " " + args + " 2>&1";
     FILE* p = popen(cmd.c_str(), "r");
     if (!p) return r;
@@ -75,11 +75,11 @@ const std::string kData = CULLIDE_DATA_DIR;
 // The acceptance figure: CGAL's cow has 5,804 triangles; also checks the JSON is parseable and
 // that the text and JSON forms agree.
 TEST(Cli, InfoReportsCowTriangles) {
-    const Run text = cullide("info " + quote(kData + "/meshes/cow.off"));
+    const CliRun text = cullide("info " + quote(kData + "/meshes/cow.off"));
     ASSERT_EQ(text.status, 0) << text.output;
     EXPECT_NE(text.output.find("triangles 5804"), std::string::npos) << text.output;
 
-    const Run json = cullide("info --json " + quote(kData + "/meshes/cow.off"));
+    const CliRun json = cullide("info --json " + quote(kData + "/meshes/cow.off"));
     ASSERT_EQ(json.status, 0) << json.output;
     const auto j = nlohmann::json::parse(json.output);
     EXPECT_EQ(j.at(0).at("total").at("triangles").get<size_t>(), 5804u);
@@ -91,7 +91,7 @@ TEST(Cli, InfoReportsCowTriangles) {
 TEST(Cli, InfoOnEveryBundledScene) {
     for (const char* dir : {"scenes", "meshes"})
         for (const auto& e : fs::directory_iterator(kData + "/" + dir)) {
-            const Run r = cullide("info " + quote(e.path().string()));
+            const CliRun r = cullide("info " + quote(e.path().string()));
             EXPECT_EQ(r.status, 0) << e.path() << ": " << r.output;
         }
 }
@@ -102,7 +102,7 @@ TEST(Cli, InfoRefusesEveryBadFile) {
     size_t n = 0;
     for (const auto& e : fs::directory_iterator(fs::path(CULLIDE_TEST_DATA_DIR) / "bad")) {
         const std::string path = e.path().string();
-        const Run r = cullide("info " + quote(path));
+        const CliRun r = cullide("info " + quote(path));
         EXPECT_EQ(r.status, 2) << path << ": " << r.output;
         // Scenes that refer to a broken mesh name that mesh; either way the user sees the path.
         EXPECT_NE(r.output.find(e.path().filename().string()), std::string::npos) << path << ": " << r.output;
@@ -114,7 +114,7 @@ TEST(Cli, InfoRefusesEveryBadFile) {
 
 // A file that does not exist: the commonest mistake, and the message must say so.
 TEST(Cli, InfoMissingFile) {
-    const Run r = cullide("info /nonexistent/dir/none.off");
+    const CliRun r = cullide("info /nonexistent/dir/none.off");
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.output.find("/nonexistent/dir/none.off"), std::string::npos) << r.output;
 }
@@ -137,7 +137,7 @@ TEST(Cli, AbsurdOptionsAreRefused) {
         {"frobnicate", "frobnicate"},
     };
     for (const auto& [args, needle] : cases) {
-        const Run r = cullide(args);
+        const CliRun r = cullide(args);
         EXPECT_EQ(r.status, 2) << args << ": " << r.output;
         EXPECT_NE(r.output.find(needle), std::string::npos) << args << ": " << r.output;
     }
@@ -162,7 +162,7 @@ TEST(Cli, MakeSceneIsByteReproducible) {
             ++files;
         }
         EXPECT_GE(files, 2u) << kind;
-        const Run info = cullide("info " + quote((a / "s.json").string()));
+        const CliRun info = cullide("info " + quote((a / "s.json").string()));
         EXPECT_EQ(info.status, 0) << info.output;
     }
     const fs::path c = freshDir("cyl_c"), d = freshDir("cyl_d");
@@ -174,7 +174,7 @@ TEST(Cli, MakeSceneIsByteReproducible) {
 // A generator whose input is bad fails before writing: nothing half-written is left behind.
 TEST(Cli, MakeSceneWithBadMeshWritesNothing) {
     const fs::path d = freshDir("badmesh");
-    const Run r = cullide("make-scene bunny --mesh /nonexistent.off -o " + quote((d / "s.json").string()));
+    const CliRun r = cullide("make-scene bunny --mesh /nonexistent.off -o " + quote((d / "s.json").string()));
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.output.find("/nonexistent.off"), std::string::npos) << r.output;
     EXPECT_TRUE(fs::is_empty(d)) << "files were written although the input was bad";

@@ -55,7 +55,10 @@ std::vector<HierarchyNode> checkStructure(const Hierarchy& h, size_t triangles, 
             maxSize = std::max(maxSize, ch.count);
         }
         EXPECT_EQ(first, n.first + n.count);
-        EXPECT_LE(maxSize - minSize, 1u) << "siblings are balanced to one triangle";
+        // Balanced: exactly (to one triangle) for Random; within a few stray triangles moved to
+        // keep patches connected for Connectivity.
+        if (o.kind == HierarchyKind::Random) EXPECT_LE(maxSize - minSize, 1u) << "siblings are balanced";
+        else EXPECT_LE(maxSize, 2 * n.count / n.childCount + 2) << "no child takes much more than its share";
     }
     return leaves;
 }
@@ -107,7 +110,7 @@ TEST(Hierarchy, ConnectivityLeavesAreConnectedCompactPatches) {
     const auto leaves = checkStructure(h, m.triangles.size(), o);
     size_t connectedLeaves = 0;
     for (const HierarchyNode& n : leaves) connectedLeaves += connected(m, h, n);
-    EXPECT_GE(connectedLeaves * 10, leaves.size() * 9) << connectedLeaves << " of " << leaves.size() << " connected";
+    EXPECT_EQ(connectedLeaves, leaves.size()) << "every leaf of a grid is a connected patch";
 
     o.kind = HierarchyKind::Random;
     const Hierarchy r = buildHierarchy(m, o);
@@ -118,6 +121,7 @@ TEST(Hierarchy, ConnectivityLeavesAreConnectedCompactPatches) {
 
 // Branching 2..7 and leaf sizes 1..40 on an odd-sized mesh: the structure holds everywhere
 // (off-by-one in the size split or a child equal to its parent would loop or lose triangles).
+// On a grid, every connectivity leaf is connected.
 TEST(Hierarchy, StructureForManyShapes) {
     const Mesh m = grid(13);  // 338 triangles
     for (HierarchyKind kind : {HierarchyKind::Connectivity, HierarchyKind::Random})

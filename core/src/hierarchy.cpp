@@ -2,9 +2,9 @@
 //
 // References: the seed paper (../shared/papers/000_7db8250a290ddd48.txt), Section 6.1 (random vs
 // connectivity-based hierarchies); CULLIDE (Govindaraju et al. 2003), Section 4 (sub-objects).
-// The connectivity split is multi-source region growing on the face-adjacency graph, seeded by
-// farthest-point sampling in graph distance (the same idea as graph-growing partitioning in
-// METIS' initial bisection).
+// The connectivity split is recursive graph-growing bisection on the face-adjacency graph (the
+// breadth-first "graph growing" of METIS' initial partitioning, Karypis and Kumar 1998), from a
+// pseudo-peripheral start (the farthest triangle in hops from an arbitrary one).
 #include "cullide/hierarchy.h"
 
 #include "cullide/error.h"
@@ -85,14 +85,7 @@ public:
         const size_t n = mesh.triangles.size();
         if (opt_.kind == HierarchyKind::Connectivity) {
             adjacency_.emplace_back(mesh);
-            centroid_.resize(n);
-            for (size_t t = 0; t < n; ++t) {
-                const Triangle& tri = mesh.triangles[t];
-                centroid_[t] = (mesh.positions[tri[0]].cast<double>() + mesh.positions[tri[1]].cast<double>() +
-                                mesh.positions[tri[2]].cast<double>()) / 3.0;
-            }
             label_.assign(n, kNone);
-            dist_.assign(n, kNone);
         }
     }
 
@@ -121,130 +114,114 @@ private:
         const HierarchyNode node = out_.nodes[nodeIndex];
         if (node.count <= opt_.leafSize) return;
         const uint32_t k = std::min<uint32_t>(opt_.branching, node.count);
-        std::vector<uint32_t> sizes(k);
-        for (uint32_t i = 0; i < k; ++i) sizes[i] = node.count / k + (i < node.count % k ? 1 : 0);
-        if (opt_.kind == HierarchyKind::Connectivity) partition(node, sizes);
+        std::span<uint32_t> set(out_.order.data() + node.first, node.count);
+        std::vector<uint32_t> sizes;
+        if (opt_.kind == HierarchyKind::Connectivity) {
+            partition(set, k, sizes);
+        } else {
+            for (uint32_t i = 0; i < k; ++i) sizes.push_back(node.count / k + (i < node.count % k ? 1 : 0));
+        }
 
         const uint32_t firstChild = uint32_t(out_.nodes.size());
         out_.nodes[nodeIndex].firstChild = firstChild;
-        out_.nodes[nodeIndex].childCount = k;
+        out_.nodes[nodeIndex].childCount = uint32_t(sizes.size());
         uint32_t first = node.first;
-        for (uint32_t i = 0; i < k; ++i) {
-            out_.nodes.push_back({first, sizes[i], 0, 0, node.depth + 1});
-            first += sizes[i];
+        for (uint32_t size : sizes) {
+            CULLIDE_CHECK(size > 0 && size < node.count, "a child is smaller than its parent and not empty");
+            out_.nodes.push_back({first, size, 0, 0, node.depth + 1});
+            first += size;
         }
-        for (uint32_t i = 0; i < k; ++i) split(firstChild + i);
+        for (uint32_t i = 0; i < sizes.size(); ++i) split(firstChild + i);
     }
 
-    // Reorders order[node.first, +count) into k connected, compact regions of the given sizes.
-    void partition(const HierarchyNode& node, const std::vector<uint32_t>& sizes) {
+    std::span<const uint32_t> neighbours(uint32_t t) const {
         const Adjacency& adj = adjacency_.front();
-        const uint32_t k = uint32_t(sizes.size());
-        std::span<uint32_t> set(out_.order.data() + node.first, node.count);
-        const uint32_t open = kNone - 1;  // label of "in this set, not yet claimed"
-        for (uint32_t t : set) label_[t] = open;
+        return {adj.next.data() + adj.start[t], adj.start[t + 1] - adj.start[t]};
+    }
 
-        auto neighbours = [&](uint32_t t) {
-            return std::span<const uint32_t>(adj.next.data() + adj.start[t], adj.start[t + 1] - adj.start[t]);
-        };
+    // Reorders `set` into k consecutive parts (appending their sizes to `sizes`), each a compact
+    // patch connected through shared edges where the mesh allows: recursive graph-growing
+    // bisection. The first part of a bisection is a prefix of the breadth-first order from a
+    // pseudo-peripheral triangle (a prefix of a breadth-first order is connected), sized in
+    // proportion to its share of the k parts; the second part is the rest, whose stray pieces
+    // (cut off from its largest piece, so bordered by the first part) move to the first part.
+    // Sizes are therefore near-equal, not exact.
+    void partition(std::span<uint32_t> set, uint32_t k, std::vector<uint32_t>& sizes) {
+        if (k < 2 || set.size() < 2) {
+            sizes.push_back(uint32_t(set.size()));
+            return;
+        }
+        const uint32_t half = k / 2;
+        const size_t target = std::max<size_t>(1, set.size() * half / k);
 
-        // Seeds: farthest-point sampling in hops. The first seed is the triangle farthest from
-        // set[0] (a pseudo-peripheral triangle); each next one is the farthest from all seeds so
-        // far, an unreachable triangle (another component) counting as infinitely far.
-        std::vector<uint32_t> seeds;
-        std::deque<uint32_t> queue;
-        auto farthestFrom = [&](const std::vector<uint32_t>& sources) {
-            for (uint32_t t : set) dist_[t] = kNone;
-            queue.clear();
-            for (uint32_t s : sources) dist_[s] = 0, queue.push_back(s);
-            while (!queue.empty()) {
-                const uint32_t t = queue.front();
-                queue.pop_front();
-                for (uint32_t u : neighbours(t))
-                    if (label_[u] == open && dist_[u] == kNone) dist_[u] = dist_[t] + 1, queue.push_back(u);
-            }
-            uint32_t best = set[0];
-            for (uint32_t t : set)
-                if (dist_[t] > dist_[best] || (dist_[t] == dist_[best] && t < best && dist_[t] != kNone)) best = t;
-            return best;
-        };
-        seeds.push_back(farthestFrom({set[0]}));
-        while (seeds.size() < k) seeds.push_back(farthestFrom(seeds));
-
-        // Grow all regions at once, one triangle per region in turn, each up to its size.
-        std::vector<std::vector<uint32_t>> regions(k);
-        std::vector<std::deque<uint32_t>> fronts(k);
-        std::vector<Vec3d> sum(k, Vec3d::Zero());
-        auto claim = [&](uint32_t r, uint32_t t) {
-            label_[t] = r;
-            regions[r].push_back(t);
-            sum[r] += centroid_[t];
-            for (uint32_t u : neighbours(t))
-                if (label_[u] == open) fronts[r].push_back(u);
-        };
-        for (uint32_t r = 0; r < k; ++r) claim(r, seeds[r]);
-        for (bool grew = true; grew;) {
-            grew = false;
-            for (uint32_t r = 0; r < k; ++r) {
-                if (regions[r].size() >= sizes[r]) continue;
-                while (!fronts[r].empty() && label_[fronts[r].front()] != open) fronts[r].pop_front();
-                if (fronts[r].empty()) continue;
-                const uint32_t t = fronts[r].front();
-                fronts[r].pop_front();
-                claim(r, t);
-                grew = true;
-            }
+        for (uint32_t t : set) label_[t] = kOpen;
+        const uint32_t seed = farthest(set[0]);
+        // Breadth-first order over the set from the seed; when a component is exhausted, go on
+        // from the first unvisited triangle of the set (in set order).
+        std::vector<uint32_t> bfs;
+        bfs.reserve(set.size());
+        size_t scan = 0;
+        uint32_t start = seed;
+        while (bfs.size() < set.size()) {
+            label_[start] = kVisited;
+            bfs.push_back(start);
+            for (size_t head = bfs.size() - 1; head < bfs.size(); ++head)
+                for (uint32_t u : neighbours(bfs[head]))
+                    if (label_[u] == kOpen) label_[u] = kVisited, bfs.push_back(u);
+            while (scan < set.size() && label_[set[scan]] != kOpen) ++scan;
+            if (scan < set.size()) start = set[scan];
         }
 
-        // What no region reached (other components, or pockets closed off by full regions):
-        // walk each leftover piece breadth-first and hand it to the region with room whose
-        // centroid is nearest, switching region when that one is full.
-        for (uint32_t s : set) {
-            if (label_[s] != open) continue;
-            queue.clear();
-            queue.push_back(s);
-            std::vector<uint32_t> piece;
-            label_[s] = open - 1;  // queued
-            while (!queue.empty()) {
-                const uint32_t t = queue.front();
-                queue.pop_front();
-                piece.push_back(t);
-                for (uint32_t u : neighbours(t))
-                    if (label_[u] == open) label_[u] = open - 1, queue.push_back(u);
-            }
-            uint32_t r = kNone;
-            for (uint32_t t : piece) {
-                if (r == kNone || regions[r].size() >= sizes[r]) {
-                    r = kNone;
-                    double best = std::numeric_limits<double>::infinity();
-                    for (uint32_t c = 0; c < k; ++c) {
-                        if (regions[c].size() >= sizes[c]) continue;
-                        const double d = (sum[c] / double(regions[c].size()) - centroid_[t]).squaredNorm();
-                        if (d < best) best = d, r = c;
-                    }
-                }
-                CULLIDE_CHECK(r != kNone, "region sizes add up to the set size");
-                label_[t] = r;
-                regions[r].push_back(t);
-                sum[r] += centroid_[t];
-            }
+        // Label the first part kFirst, then find the pieces of the rest.
+        for (size_t i = 0; i < bfs.size(); ++i) label_[bfs[i]] = i < target ? kFirst : kOpen;
+        std::vector<std::vector<uint32_t>> pieces;
+        for (size_t i = target; i < bfs.size(); ++i) {
+            if (label_[bfs[i]] != kOpen) continue;
+            std::vector<uint32_t>& piece = pieces.emplace_back(1, bfs[i]);
+            label_[bfs[i]] = kVisited;
+            for (size_t head = 0; head < piece.size(); ++head)
+                for (uint32_t u : neighbours(piece[head]))
+                    if (label_[u] == kOpen) label_[u] = kVisited, piece.push_back(u);
         }
-
-        uint32_t* dst = set.data();
-        for (uint32_t r = 0; r < k; ++r) {
-            CULLIDE_CHECK(regions[r].size() == sizes[r], "every region filled to its size");
-            dst = std::copy(regions[r].begin(), regions[r].end(), dst);
+        size_t largest = 0;
+        for (size_t p = 1; p < pieces.size(); ++p)
+            if (pieces[p].size() > pieces[largest].size()) largest = p;
+        std::vector<uint32_t> first(bfs.begin(), bfs.begin() + target), second;
+        for (size_t p = 0; p < pieces.size(); ++p) {
+            bool touchesFirst = false;
+            for (uint32_t t : pieces[p])
+                for (uint32_t u : neighbours(t)) touchesFirst = touchesFirst || label_[u] == kFirst;
+            std::vector<uint32_t>& to = (p != largest && touchesFirst) ? first : second;
+            to.insert(to.end(), pieces[p].begin(), pieces[p].end());
         }
         for (uint32_t t : set) label_[t] = kNone;
+        std::copy(second.begin(), second.end(), std::copy(first.begin(), first.end(), set.begin()));
+        partition(set.subspan(0, first.size()), half, sizes);
+        partition(set.subspan(first.size()), k - half, sizes);
     }
+
+    // The triangle labelled kOpen farthest in hops from `from` over kOpen triangles (ties: the
+    // last reached in breadth-first order). Leaves the labels as they were.
+    uint32_t farthest(uint32_t from) {
+        std::vector<uint32_t>& queue = scratch_;
+        queue.clear();
+        queue.push_back(from);
+        label_[from] = kVisited;
+        for (size_t head = 0; head < queue.size(); ++head)
+            for (uint32_t u : neighbours(queue[head]))
+                if (label_[u] == kOpen) label_[u] = kVisited, queue.push_back(u);
+        for (uint32_t t : queue) label_[t] = kOpen;
+        return queue.back();
+    }
+
+    static constexpr uint32_t kOpen = kNone - 1, kVisited = kNone - 2, kFirst = kNone - 3;
 
     const Mesh& mesh_;
     HierarchyOptions opt_;
     Hierarchy& out_;
     std::mt19937_64 rng_;
     std::vector<Adjacency> adjacency_;  // empty for Random
-    std::vector<Vec3d> centroid_;
-    std::vector<uint32_t> label_, dist_;
+    std::vector<uint32_t> label_, scratch_;
 };
 
 }  // namespace

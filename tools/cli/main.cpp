@@ -16,10 +16,24 @@ int main(int argc, char** argv) {
     cullide::cli::Action action;
     cullide::cli::addInfoCommand(app, action);
     cullide::cli::addMakeSceneCommand(app, action);
+    cullide::cli::addPruneCommand(app, action);
 
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
+        // CLI11 says only "A subcommand is required" for a misspelt command; name it.
+        if (argc > 1 && argv[1][0] != '-') {
+            std::string known;
+            bool isCommand = false;
+            for (const CLI::App* sub : app.get_subcommands({})) {
+                known += (known.empty() ? "" : ", ") + sub->get_name();
+                isCommand = isCommand || sub->get_name() == argv[1];
+            }
+            if (!isCommand) {
+                std::fprintf(stderr, "cullide: error: unknown command '%s' (commands: %s)\n", argv[1], known.c_str());
+                return 2;
+            }
+        }
         const int rc = app.exit(e);
         return rc == 0 ? 0 : 2;
     }

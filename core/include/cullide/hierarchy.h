@@ -9,7 +9,8 @@
 //   - Node 0 is the root (the whole object). Children of a node are contiguous in `nodes`
 //     (firstChild .. firstChild + childCount - 1); a leaf has childCount == 0.
 //   - A node is split while it holds more than `leafSize` triangles, into up to `branching`
-//     children of near-equal size (sizes differ by at most one triangle within a split).
+//     children of near-equal size (exactly equal, to one triangle, for Random; for Connectivity
+//     a few triangles may move between siblings to keep patches connected).
 //   - Deterministic: same mesh and options, same hierarchy (no unordered iteration, no threads
 //     inside one object's build; a seeded std::mt19937_64 with our own integer draws).
 #pragma once
@@ -23,11 +24,10 @@
 namespace cullide {
 
 enum class HierarchyKind : uint8_t {
-    // Compact patches connected through shared edges: each split grows `branching` regions at
-    // once from seeds spread far apart over the face-adjacency graph (graph distance, found by
-    // breadth-first search), one triangle per region in turn, each region capped at its share.
-    // Triangles the regions cannot reach (other components) go, a component at a time, to the
-    // region whose centroid is nearest.
+    // Compact patches connected through shared edges: each split is a recursive bisection by
+    // breadth-first growth over the face-adjacency graph from a pseudo-peripheral triangle (the
+    // first part is a prefix of that order, hence connected). Components the growth cannot
+    // reach are visited afterwards, in order, so a soup still splits into equal parts.
     Connectivity,
     // The paper's poor baseline: a seeded random permutation cut into equal ranges.
     Random,

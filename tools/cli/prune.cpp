@@ -1,0 +1,192 @@
+// `cullide prune SCENE`: the potentially colliding set of every frame of a scene, by Cullide or
+// the seed paper's self-intersection variant, with per-pass statistics.
+#include "commands.h"
+#include "output.h"
+
+#include "cullide/cullide.h"
+#include "cullide/error.h"
+#include "cullide/mesh_io.h"
+#include "cullide/raster/cpu_backend.h"
+#include "cullide/scene_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <map>
+#include <string>
+
+namespace cullide::cli {
+namespace {
+
+struct PruneOptions {
+    std::string scene;
+    std::string method = "modified";
+    std::string resolution = "500";
+    std::string depth = "24";
+    std::string directions = "axes";
+    std::string hierarchy = "connectivity";
+    uint32_t leafSize = 16;
+    uint32_t branching = 4;
+    uint64_t seed = 1;
+    std::string backend = "cpu";
+    int threads = 0;
+    long frame = -1;  // -1: every frame
+    std::string json, out;
+};
+
+// "500" or "640x480".
+std::pair<int, int> parseResolution(const std::string& text) {
+    const std::string source = "option --resolution";
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) == 3 && (x == 'x' || x == 'X')) {
+    } else if (std::sscanf(text.c_str(), "%d%c", &w, &extra) == 1) {
+        h = w;
+    } else {
+        throw InputError(source, "cannot read '" + text + "' (expected N or WxH, e.g. 500 or 640x480)");
+    }
+    if (w < 1 || h < 1 || w > 16384 || h > 16384)
+        throw InputError(source, "'" + text + "': each side must be 1 to 16384 pixels");
+    return {w, h};
+}
+
+CullideOptions cullideOptions(const PruneOptions& o) {
+    CullideOptions c;
+    c.method = parseCullMethod(o.method);
+    std::tie(c.width, c.height) = parseResolution(o.resolution);
+    try {
+        c.depth = DepthFormat::parse(o.depth);
+    } catch (const InputError& e) {
+        throw InputError("option --depth", e.what());
+    }
+    c.directions = parseDirections(o.directions);
+    c.hierarchy.kind = parseHierarchyKind(o.hierarchy);
+    c.hierarchy.leafSize = o.leafSize;
+    c.hierarchy.branching = o.branching;
+    c.hierarchy.seed = o.seed;
+    c.validate();
+    return c;
+}
+
+nlohmann::ordered_json passJson(const PassStats& p) {
+    return {{"level", p.level},           {"direction", p.direction},
+            {"nodes_in", p.nodesIn},      {"nodes_out", p.nodesOut},
+            {"triangles_in", p.trianglesIn}, {"triangles_out", p.trianglesOut},
+            {"triangles_rendered", p.trianglesRendered}, {"queries", p.queries},
+            {"seconds", p.seconds}};
+}
+
+// The scene at one frame as one mesh, PCS triangles green and the rest grey (Figures 6 and 7).
+void writePcsPly(const Scene& scene, const std::vector<PcsTriangle>& pcs, const std::string& path) {
+    Mesh all;
+    std::vector<Rgb8> colours;
+    std::vector<size_t> firstTriangle;
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        const Mesh m = scene.worldMesh(i);
+        const uint32_t base = uint32_t(all.positions.size());
+        firstTriangle.push_back(all.triangles.size());
+        all.positions.insert(all.positions.end(), m.positions.begin(), m.positions.end());
+        for (const Triangle& t : m.triangles) all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    colours.assign(all.triangles.size(), Rgb8{170, 170, 170});
+    for (const PcsTriangle& p : pcs) colours[firstTriangle[p.object] + p.triangle] = Rgb8{40, 200, 40};
+    PlyWriteOptions w;
+    w.faceColours = colours;
+    writePly(all, path, w);
+}
+
+int runPrune(const PruneOptions& o) {
+    const CullideOptions options = cullideOptions(o);
+    raster::CpuBackendOptions bo;
+    bo.threads = o.threads;
+    const std::unique_ptr<DepthBackend> backend = raster::makeCpuBackend(bo);
+
+    const Animation animation = loadScene(o.scene);
+    if (o.frame >= 0 && size_t(o.frame) >= animation.frameCount())
+        throw InputError("option --frame", "frame " + std::to_string(o.frame) + " requested, but " + o.scene + " has " +
+                                               std::to_string(animation.frameCount()) + " frame(s)");
+    if (!o.out.empty() && o.frame < 0 && animation.frameCount() > 1)
+        throw InputError("option --out", "the scene has " + std::to_string(animation.frameCount()) +
+                                             " frames; choose one with --frame to write its PLY");
+    const size_t first = o.frame >= 0 ? size_t(o.frame) : 0;
+    const size_t last = o.frame >= 0 ? size_t(o.frame) + 1 : animation.frameCount();
+
+    std::printf("%s: %s, %dx%d, %s, %zu direction(s), %s hierarchy (leaf %u, branching %u), %s\n", o.scene.c_str(),
+                toString(options.method), options.width, options.height, options.depth.name().c_str(),
+                options.directions.size(), toString(options.hierarchy.kind), options.hierarchy.leafSize,
+                options.hierarchy.branching, backend->describe().c_str());
+    nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+    for (size_t f = first; f < last; ++f) {
+        const Scene scene = animation.sceneAt(f);
+        const CullideResult r = runCullide(scene, *backend, options);
+        size_t rendered = 0, queries = 0;
+        for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
+        std::map<uint32_t, size_t> perObject;
+        for (const PcsTriangle& p : r.pcs) ++perObject[p.object];
+        const size_t total = scene.triangleCount();
+        std::printf("frame %zu: PCS %zu of %zu triangles (%.2f%%) in %zu object(s); %u level(s), %zu reducePCS calls, "
+                    "%zu triangles rendered, %zu queries; hierarchy %.1f ms, total %.1f ms\n",
+                    f, r.pcs.size(), total, total ? 100.0 * double(r.pcs.size()) / double(total) : 0.0,
+                    perObject.size(), r.levels, r.passes.size(), rendered, queries, 1e3 * r.hierarchySeconds,
+                    1e3 * r.totalSeconds);
+        if (!o.json.empty()) {
+            nlohmann::ordered_json pcs = nlohmann::ordered_json::array();
+            for (const PcsTriangle& p : r.pcs) pcs.push_back({p.object, p.triangle});
+            nlohmann::ordered_json passes = nlohmann::ordered_json::array();
+            for (const PassStats& p : r.passes) passes.push_back(passJson(p));
+            frames.push_back({{"frame", f}, {"triangles", total}, {"pcs", pcs}, {"passes", passes},
+                              {"levels", r.levels}, {"hierarchy_seconds", r.hierarchySeconds},
+                              {"total_seconds", r.totalSeconds}});
+        }
+        if (!o.out.empty()) writePcsPly(scene, r.pcs, o.out);
+    }
+    if (!o.json.empty()) {
+        nlohmann::ordered_json objects = nlohmann::ordered_json::array();
+        for (const Object& obj : animation.scene.objects) objects.push_back(obj.name);
+        nlohmann::ordered_json j = {
+            {"scene", o.scene},
+            {"options",
+             {{"method", toString(options.method)}, {"width", options.width}, {"height", options.height},
+              {"depth", options.depth.name()}, {"directions", nlohmann::ordered_json::array()},
+              {"hierarchy", toString(options.hierarchy.kind)}, {"leaf_size", options.hierarchy.leafSize},
+              {"branching", options.hierarchy.branching}, {"backend", backend->describe()}}},
+            {"objects", objects},
+            {"frames", frames}};
+        for (const Vec3d& d : options.directions) j["options"]["directions"].push_back({d.x(), d.y(), d.z()});
+        writeFileAtomically(o.json, j.dump(1) + "\n");
+    }
+    return 0;
+}
+
+}  // namespace
+
+void addPruneCommand(CLI::App& app, Action& action) {
+    auto o = std::make_shared<PruneOptions>();
+    CLI::App* sub = app.add_subcommand("prune", "Compute the potentially colliding set (PCS) of every frame of a scene");
+    sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
+    sub->add_option("--method", o->method, "original (Cullide, contacts kept) | modified (self-intersections kept)")
+        ->capture_default_str();
+    sub->add_option("--resolution", o->resolution, "Viewport: N or WxH pixels (1 to 16384 per side)")->capture_default_str();
+    sub->add_option("--depth", o->depth, "Depth format: unorm bits 8..32 (e.g. 24, d16) or float")->capture_default_str();
+    sub->add_option("--directions", o->directions,
+                    "View directions: 'axes' (+x -x +y -y +z -z), a count N (spread), or a list 'x,-y,z' / '1 0 0;0 1 1'")
+        ->capture_default_str();
+    sub->add_option("--hierarchy", o->hierarchy, "connectivity | random")->capture_default_str();
+    sub->add_option("--leaf-size", o->leafSize, "Triangles per hierarchy leaf (1 to 1,000,000)")
+        ->check(CLI::Range(1u, 1'000'000u))
+        ->capture_default_str();
+    sub->add_option("--branching", o->branching, "Children per hierarchy node (2 to 64)")
+        ->check(CLI::Range(2u, 64u))
+        ->capture_default_str();
+    sub->add_option("--seed", o->seed, "Seed of the random hierarchy");
+    sub->add_option("--backend", o->backend, "cpu (the reference rasterizer)")
+        ->check(CLI::IsMember({"cpu"}))
+        ->capture_default_str();
+    sub->add_option("--threads", o->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));
+    sub->add_option("--frame", o->frame, "Prune only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
+    sub->add_option("--json", o->json, "Write the PCS ([object, triangle] pairs), per-pass stats and times as JSON");
+    sub->add_option("--out", o->out, "Write the frame as PLY with PCS triangles coloured green");
+    sub->callback([o, &action] { action = [o] { return runPrune(*o); }; });
+}
+
+}  // namespace cullide::cli
