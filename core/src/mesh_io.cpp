@@ -11,25 +11,24 @@
 //     float parser (fast_atof) is not correctly rounded (3486 of 90000 random %.9g floats came
 //     back different), so writeOff/writePly(ascii) could not round-trip bit-exactly; and
 //     aiProcess_Triangulate ear-clips pentagons rather than fanning them.
-//   - STL: assimp, which decides ascii vs binary (binary when the size is 84 + 50 n) and rejects
-//     truncated files. It silently drops a fourth `vertex` in an ascii facet, so we count the
-//     `vertex` keywords ourselves. Ascii STL coordinates are therefore parsed by assimp's
-//     fast_atof (deterministic, but not always the correctly rounded float).
-//   - Floats of OFF and PLY are parsed with std::from_chars (correctly rounded, locale-free) and
+//   - STL: our own reader too. assimp's STL importer was tried and silently drops a fourth
+//     `vertex` in an ascii facet, leaks its half-built mesh whenever an ascii parse fails (found by
+//     the fuzzer, LeakSanitizer) and rounds floats inexactly. Binary when the size is exactly
+//     84 + 50 n (n from the header), as assimp decides too; ascii otherwise, if it starts with
+//     "solid".
+//   - Floats of OFF, PLY and ascii STL are parsed with std::from_chars (correctly rounded, locale-free) and
 //     written with std::to_chars(general, 9) (the %.9g format, locale-free), so write -> read is
 //     the identity on finite floats.
 #include "cullide/mesh_io.h"
 
 #include "cullide/error.h"
 
-#include <assimp/DefaultLogger.hpp>
-#include <assimp/Importer.hpp>
-#include <assimp/scene.h>
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
 #include <atomic>
 #include <bit>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -678,74 +677,144 @@ Mesh readObj(const std::string& src, std::string_view data) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// STL via assimp, welded on bit-identical positions.
+// STL, ascii or binary, welded on bit-identical positions.
 
-bool isStlSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v'; }
-
-// Number of whitespace-delimited `vertex` keywords (ascii STL only).
-size_t countVertexKeywords(std::string_view data) {
-    size_t n = 0;
-    for (size_t i = data.find("vertex"); i != std::string_view::npos; i = data.find("vertex", i + 6)) {
-        const bool before = i == 0 || isStlSpace(data[i - 1]);
-        const bool after = i + 6 == data.size() || isStlSpace(data[i + 6]);
-        if (before && after) ++n;
+class StlWelder {
+public:
+    explicit StlWelder(Mesh& mesh) : mesh_(mesh) {}
+    uint32_t add(const Vec3f& p) {
+        const std::array<uint32_t, 3> key{std::bit_cast<uint32_t>(p.x()), std::bit_cast<uint32_t>(p.y()), std::bit_cast<uint32_t>(p.z())};
+        auto [it, inserted] = index_.try_emplace(key, static_cast<uint32_t>(mesh_.positions.size()));
+        if (inserted) mesh_.positions.push_back(p);
+        return it->second;
     }
-    return n;
+
+private:
+    Mesh& mesh_;
+    std::map<std::array<uint32_t, 3>, uint32_t> index_;  // lookups only: the order comes from the file
+};
+
+bool keywordIs(std::string_view tok, std::string_view kw) {
+    return tok.size() == kw.size() &&
+           std::equal(tok.begin(), tok.end(), kw.begin(), [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == b; });
+}
+
+Mesh readStlBinary(const std::string& src, std::string_view data, uint32_t facets) {
+    Mesh mesh;
+    mesh.triangles.reserve(facets);
+    StlWelder weld(mesh);
+    for (uint32_t f = 0; f < facets; ++f) {
+        const char* rec = data.data() + 84 + 50 * size_t(f) + 12;  // skip the normal
+        Triangle t;
+        for (int k = 0; k < 3; ++k) {
+            Vec3f p;
+            for (int c = 0; c < 3; ++c) {
+                unsigned char b[4];
+                std::memcpy(b, rec + 12 * k + 4 * c, 4);
+                if constexpr (std::endian::native == std::endian::big) std::reverse(b, b + 4);
+                std::memcpy(&p[c], b, 4);
+            }
+            if (!p.allFinite()) throw InputError(src, "facet " + std::to_string(f) + " has a non-finite coordinate (NaN or Inf)");
+            t[k] = weld.add(p);
+        }
+        mesh.triangles.push_back(t);
+    }
+    return mesh;
+}
+
+// solid [name] { facet normal a b c  outer loop  vertex x y z (3 times)  endloop  endfacet }
+// endsolid [name], possibly several solids one after the other. Keywords in any case.
+Mesh readStlAscii(const std::string& src, std::string_view data) {
+    Mesh mesh;
+    StlWelder weld(mesh);
+    LineReader lines(data);
+    Line line;
+    std::vector<std::string_view> tok;
+    size_t facet = 0;
+    enum class State { Outside, Solid, Facet, Loop, EndLoop } state = State::Outside;
+    int corners = 0;
+    Triangle t{};
+    auto fail = [&](const std::string& cause) -> void { throw InputError(src, atLine(line.number) + cause); };
+    while (lines.next(line)) {
+        splitTokens(line.text, tok);
+        if (tok.empty()) continue;
+        const std::string_view kw = tok[0];
+        switch (state) {
+        case State::Outside:
+            if (!keywordIs(kw, "solid")) fail("parse error: expected 'solid', got " + quote(kw));
+            state = State::Solid;  // the rest of the line is the solid's name
+            break;
+        case State::Solid:
+            if (keywordIs(kw, "endsolid")) {
+                state = State::Outside;
+                break;
+            }
+            if (!keywordIs(kw, "facet") || tok.size() != 5 || !keywordIs(tok[1], "normal"))
+                fail("parse error: expected 'facet normal <x> <y> <z>' or 'endsolid'");
+            for (int c = 0; c < 3; ++c) {
+                float n;  // the normal is not used, but must be a number (NaN/Inf/overflow tolerated)
+                if (parseFloatToken(tok[2 + c], n) == NumStatus::Invalid) fail("parse error: " + quote(tok[2 + c]) + " is not a number");
+            }
+            state = State::Facet;
+            break;
+        case State::Facet:
+            if (tok.size() != 2 || !keywordIs(kw, "outer") || !keywordIs(tok[1], "loop")) fail("parse error: expected 'outer loop'");
+            state = State::Loop;
+            corners = 0;
+            break;
+        case State::Loop:
+            if (keywordIs(kw, "endloop")) {
+                if (tok.size() != 1) fail("parse error: junk after 'endloop'");
+                if (corners != 3)
+                    fail("facet " + std::to_string(facet) + " has " + std::to_string(corners) + " vertices; every facet needs exactly 3");
+                state = State::EndLoop;
+                break;
+            }
+            if (!keywordIs(kw, "vertex") || tok.size() != 4) fail("parse error: expected 'vertex <x> <y> <z>' or 'endloop'");
+            if (corners == 3) fail("facet " + std::to_string(facet) + " has more than 3 vertices; every facet needs exactly 3");
+            {
+                Vec3f p;
+                for (int c = 0; c < 3; ++c) {
+                    const NumStatus st = parseFloatToken(tok[1 + c], p[c]);
+                    if (st == NumStatus::Invalid) fail("parse error: " + quote(tok[1 + c]) + " is not a number");
+                    if (st == NumStatus::OutOfRange || !std::isfinite(p[c]))
+                        fail("facet " + std::to_string(facet) + " has a non-finite coordinate " + quote(tok[1 + c]) + " (NaN, Inf or out of float range)");
+                }
+                t[corners++] = weld.add(p);
+            }
+            break;
+        case State::EndLoop:
+            if (!keywordIs(kw, "endfacet") || tok.size() != 1) fail("parse error: expected 'endfacet'");
+            mesh.triangles.push_back(t);
+            ++facet;
+            state = State::Solid;
+            break;
+        }
+    }
+    if (state != State::Outside) throw InputError(src, "parse error: the file ends inside a solid (truncated? no 'endsolid')");
+    return mesh;
 }
 
 Mesh readStl(const std::string& src, std::string_view data) {
     if (data.empty()) throw InputError(src, "empty file");
-    uint32_t declared = 0;
-    bool binary = false;
     if (data.size() >= 84) {
-        std::memcpy(&declared, data.data() + 80, 4);  // little-endian on every platform we build for
-        binary = 84 + 50ull * declared == data.size();
-    }
-    if (binary && declared == 0) throw InputError(src, "mesh has zero triangles (binary STL with 0 facets)");
-
-    Assimp::Importer importer;  // assimp logs through DefaultLogger, a NullLogger unless someone creates one
-    const aiScene* scene = importer.ReadFileFromMemory(data.data(), data.size(), 0, "stl");
-    if (!scene) throw InputError(src, std::string("parse error (assimp STL): ") + importer.GetErrorString());
-    size_t faces = 0;
-    for (unsigned m = 0; m < scene->mNumMeshes; ++m) faces += scene->mMeshes[m]->mNumFaces;
-    if (faces == 0) throw InputError(src, "mesh has zero triangles");
-    if (!binary) {
-        const size_t keywords = countVertexKeywords(data);
-        if (keywords != 3 * faces)
-            throw InputError(src, "ascii STL has " + std::to_string(keywords) + " 'vertex' lines for " + std::to_string(faces) +
-                                      " facets; every facet needs exactly 3");
-    } else if (faces != declared) {
-        throw InputError(src, "assimp read " + std::to_string(faces) + " facets where the file declares " + std::to_string(declared));
-    }
-
-    Mesh mesh;
-    mesh.triangles.reserve(faces);
-    std::map<std::array<uint32_t, 3>, uint32_t> index;  // position bits -> first vertex with them
-    size_t facet = 0;
-    for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-        const aiMesh* am = scene->mMeshes[m];
-        if (am->mNumVertices != 3ull * am->mNumFaces)
-            throw InputError(src, "assimp returned an STL mesh that is not 3 vertices per facet; refusing it");
-        for (unsigned f = 0; f < am->mNumFaces; ++f, ++facet) {
-            const aiFace& face = am->mFaces[f];
-            if (face.mNumIndices != 3) throw InputError(src, "facet " + std::to_string(facet) + " is not a triangle");
-            Triangle t;
-            for (int k = 0; k < 3; ++k) {
-                const unsigned vi = face.mIndices[k];
-                if (vi != 3 * f + k) throw InputError(src, "assimp returned an STL mesh in an unexpected layout; refusing it");
-                const aiVector3D& a = am->mVertices[vi];
-                const Vec3f p(a.x, a.y, a.z);
-                if (!p.allFinite())
-                    throw InputError(src, "facet " + std::to_string(facet) + " has a non-finite coordinate (NaN or Inf)");
-                const std::array<uint32_t, 3> key{std::bit_cast<uint32_t>(p.x()), std::bit_cast<uint32_t>(p.y()), std::bit_cast<uint32_t>(p.z())};
-                auto [it, inserted] = index.try_emplace(key, static_cast<uint32_t>(mesh.positions.size()));
-                if (inserted) mesh.positions.push_back(p);
-                t[k] = it->second;
-            }
-            mesh.triangles.push_back(t);
+        uint32_t facets;
+        unsigned char b[4];
+        std::memcpy(b, data.data() + 80, 4);
+        if constexpr (std::endian::native == std::endian::big) std::reverse(b, b + 4);
+        std::memcpy(&facets, b, 4);
+        // A binary STL is exactly 84 + 50 n bytes, even when its header starts with "solid".
+        if (84 + 50ull * facets == data.size()) {
+            if (facets == 0) throw InputError(src, "mesh has zero triangles (binary STL with 0 facets)");
+            return readStlBinary(src, data, facets);
         }
     }
-    return mesh;
+    size_t i = 0;
+    while (i < data.size() && std::isspace(static_cast<unsigned char>(data[i]))) ++i;
+    if (!keywordIs(data.substr(i, 5), "solid"))
+        throw InputError(src, "parse error: neither an ascii STL (no 'solid') nor a binary STL (" + std::to_string(data.size()) +
+                                  " bytes is not 84 + 50 x the facet count in its header; truncated?)");
+    return readStlAscii(src, data);
 }
 
 // ---------------------------------------------------------------------------------------------
