@@ -51,6 +51,13 @@ using detail::WinVertex;
 constexpr uint32_t kSetupChunk = 1024;  // triangles per setup task
 constexpr uint32_t kBinChunk = 4096;    // records (or events) per binning task
 constexpr uint32_t kMaxBinChunks = 64;
+constexpr size_t kPrefetch = 8;  // records fetched ahead in a tile's list
+
+// A vertex snapped once (rule 3); `inside` when it needs no clipping (then |x|, |y| <= 2^29).
+struct SnapVertex {
+    int32_t x, y;
+    bool inside;
+};
 
 // Tile rectangle [tx0, tx1] x [ty0, ty1], inclusive; tx0 > tx1 when empty.
 struct TileRect {
@@ -99,9 +106,10 @@ void rasterizeInTile(const EdgeTri& t, int bx0, int by0, int bx1, int by1, uint3
             ++frag;
             const double z = clampDepth(t.plane.at(row, i));
             const uint32_t incoming = Float ? std::bit_cast<uint32_t>(float(z)) : encodeUnorm(z, bits);
-            if (!depthTest(F, incoming, d[i])) continue;
-            ++pass;
-            if (mask) d[i] = incoming;
+            const uint32_t stored = d[i];
+            const bool ok = depthTest(F, incoming, stored);  // branch-free below: outcomes are noisy
+            pass += ok;
+            d[i] = ok && mask ? incoming : stored;
         }
     }
     fragments += frag;
@@ -227,10 +235,15 @@ private:
     void updateWindow() {
         if (windowValid_) return;
         window_.resize(positions_.size());
+        snapped_.resize(positions_.size());
         tbb::parallel_for(tbb::blocked_range<size_t>(0, positions_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t v = r.begin(); v != r.end(); ++v) {
                 const Vec3d w = view_.toWindow(positions_[v]);
                 window_[v] = {w.x(), w.y(), w.z()};
+                SnapVertex& s = snapped_[v];
+                s.inside = detail::insideClipVolume(window_[v], params_);
+                s.x = s.inside ? int32_t(snapToFixed(w.x(), params_.subpixelBits)) : 0;
+                s.y = s.inside ? int32_t(snapToFixed(w.y(), params_.subpixelBits)) : 0;
             }
         });
         windowValid_ = true;
@@ -238,27 +251,46 @@ private:
 
     // Step 3: set up the union of the drawn ranges, once per triangle.
     void setupDrawn(const CommandList& list) {
+        // The union of the drawn ranges as sorted disjoint intervals: by sorting the ranges when
+        // there are few, else by a difference array over the touched triangle span.
         ranges_.clear();
-        for (const Command& c : list.commands())
-            if (c.op == Command::Op::Draw && c.count > 0) ranges_.push_back({c.first, c.first + c.count});
-        std::sort(ranges_.begin(), ranges_.end());
-        chunks_.clear();
-        uint32_t curB = 0, curE = 0;
-        bool open = false;
-        auto flush = [&] {
-            for (uint32_t b = curB; b < curE; b += kSetupChunk) chunks_.push_back({b, std::min(curE, b + kSetupChunk)});
-        };
-        for (const auto& r : ranges_) {
-            if (open && r[0] <= curE) {
-                curE = std::max(curE, r[1]);
-            } else {
-                if (open) flush();
-                curB = r[0];
-                curE = r[1];
-                open = true;
+        uint32_t lo = UINT32_MAX, hi = 0;
+        for (const Command& c : list.commands()) {
+            if (c.op != Command::Op::Draw || c.count == 0) continue;
+            const std::array<uint32_t, 2> r{c.first, c.first + c.count};
+            if (!ranges_.empty() && ranges_.back() == r) continue;  // repeated draw of one object
+            ranges_.push_back(r);
+            lo = std::min(lo, r[0]);
+            hi = std::max(hi, r[1]);
+        }
+        std::vector<std::array<uint32_t, 2>> merged;
+        if (ranges_.size() * 16 < size_t(hi - lo) || ranges_.size() < 64) {
+            std::sort(ranges_.begin(), ranges_.end());
+            for (const auto& r : ranges_) {
+                if (!merged.empty() && r[0] <= merged.back()[1])
+                    merged.back()[1] = std::max(merged.back()[1], r[1]);
+                else
+                    merged.push_back(r);
+            }
+        } else {
+            coverDiff_.assign(size_t(hi - lo) + 1, 0);
+            for (const auto& r : ranges_) {
+                ++coverDiff_[r[0] - lo];
+                --coverDiff_[r[1] - lo];
+            }
+            int32_t depth = 0;
+            for (uint32_t t = lo; t < hi; ++t) {
+                const int32_t before = depth;
+                depth += coverDiff_[t - lo];
+                if (before == 0 && depth > 0) merged.push_back({t, t});
+                if (depth > 0) merged.back()[1] = t + 1;
             }
         }
-        if (open) flush();
+        chunks_.clear();
+        for (const auto& r : merged)
+            for (uint32_t b = r[0]; b < r[1]; b += kSetupChunk) chunks_.push_back({b, std::min(r[1], b + kSetupChunk)});
+        SetupParams params = params_;
+        params.dropEmpty = true;
 
         if (triFlags_.size() < triangles_.size()) {
             triFlags_.resize(triangles_.size());
@@ -280,11 +312,22 @@ private:
                 for (uint32_t t = chunks_[ci][0]; t < chunks_[ci][1]; ++t) {
                     const Triangle& tri = triangles_[t];
                     int n = 0;
-                    triFlags_[t] = detail::setupTriangle(window_[tri[0]], window_[tri[1]], window_[tri[2]], params_, sub, n);
+                    const WinVertex &v0 = window_[tri[0]], &v1 = window_[tri[1]], &v2 = window_[tri[2]];
+                    const SnapVertex &s0 = snapped_[tri[0]], &s1 = snapped_[tri[1]], &s2 = snapped_[tri[2]];
+                    if (s0.inside && s1.inside && s2.inside) {  // the common case: vertices snapped once
+                        if (detail::trivialReject(v0, v1, v2, params)) {
+                            triFlags_[t] = detail::kRejected;
+                        } else {
+                            const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
+                            triFlags_[t] = detail::setupUnclipped(v0, v1, v2, sx, sy, params, sub, n);
+                        }
+                    } else {
+                        triFlags_[t] = detail::setupTriangle(v0, v1, v2, params, sub, n);
+                    }
                     recBegin_[t] = uint32_t(recs.size());
                     for (int s = 0; s < n; ++s) {
                         EdgeTri e;
-                        if (!detail::makeEdgeTri(sub[s], params_, e)) continue;
+                        if (!detail::makeEdgeTri(sub[s], params, e)) continue;
                         recs.push_back(e);
                         tiles.push_back(TileRect{uint16_t(e.x0 / ts), uint16_t(e.y0 / ts), uint16_t(e.x1 / ts),
                                                  uint16_t(e.y1 / ts)});
@@ -456,9 +499,17 @@ private:
                     size_t p = gallopLowerBound(recs, nrecs, hint, e.recBegin);
                     const RasterFn fn = table[size_t(e.func)];
                     const uint64_t before = out.passed;
-                    for (; p < nrecs && recs[p] < e.recEnd; ++p)
+                    for (; p < nrecs && recs[p] < e.recEnd; ++p) {
+                        // A tile's records are scattered through records_: fetch ahead (no effect
+                        // on results).
+                        if (p + kPrefetch < nrecs) {
+                            const char* ahead = reinterpret_cast<const char*>(&records_[recs[p + kPrefetch]]);
+                            __builtin_prefetch(ahead);
+                            __builtin_prefetch(ahead + 64);
+                        }
                         fn(records_[recs[p]], bx0, by0, bx1, by1, depth_.data(), size_t(W), e.mask, bits, out.fragments,
                            out.passed);
+                    }
                     hint = p;
                     const uint64_t n = out.passed - before;
                     if (e.query >= 0 && n > 0) {
@@ -492,6 +543,7 @@ private:
     bool haveView_ = false;
     SetupParams params_;
     std::vector<WinVertex> window_;
+    std::vector<SnapVertex> snapped_;  // window_ snapped once per vertex (fast path)
     bool windowValid_ = false;
     std::vector<uint32_t> depth_;
     detail::PipelineState state_;
@@ -500,6 +552,7 @@ private:
     // Fast-path scratch, reused across lists (capacity kept).
     int tilesX_ = 0, tilesY_ = 0;
     std::vector<std::array<uint32_t, 2>> ranges_, chunks_;
+    std::vector<int32_t> coverDiff_;
     std::vector<uint8_t> triFlags_;
     std::vector<uint32_t> recBegin_, recEnd_;
     std::vector<std::vector<EdgeTri>> chunkRecords_;

@@ -66,56 +66,35 @@ bool planeFrom(const WinVertex& p0, const WinVertex& p1, const WinVertex& p2, De
 
 }  // namespace
 
-uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params,
-                      SnappedTri out[kMaxSubTriangles], int& count) {
-    count = 0;
-    if (!finite(v0) || !finite(v1) || !finite(v2)) return kRejected;
+namespace {
 
-    // Trivial rejection: all three vertices beyond one side of the viewport or the depth range.
-    // Beyond x < 0 every snapped x is <= 0, left of every centre (>= 1/2); likewise for the others.
-    const double W = params.width, H = params.height;
-    if ((v0.x < 0 && v1.x < 0 && v2.x < 0) || (v0.x > W && v1.x > W && v2.x > W) ||
-        (v0.y < 0 && v1.y < 0 && v2.y < 0) || (v0.y > H && v1.y > H && v2.y > H) ||
-        (v0.z < 0 && v1.z < 0 && v2.z < 0) || (v0.z > 1 && v1.z > 1 && v2.z > 1))
-        return kRejected;
-
-    // Depth plane of the whole (unclipped, unsnapped) triangle.
-    DepthPlane plane;
-    const bool havePlane = planeFrom(v0, v1, v2, plane);
-
-    // Clipping against the depth range and the guard band, only where needed.
-    const double G = guardBandPixels(params.subpixelBits);
-    WinVertex polyA[kMaxPolygon] = {v0, v1, v2};
-    WinVertex polyB[kMaxPolygon];
-    WinVertex* poly = polyA;
-    int n = 3;
-    uint8_t flags = 0;
-    auto outside = [&](const WinVertex& v) {
-        return v.z < 0 || v.z > 1 || v.x < -G || v.x > G || v.y < -G || v.y > G;
-    };
-    if (outside(v0) || outside(v1) || outside(v2)) {
-        flags |= kClipped;
-        const ClipPlane planes[6] = {{2, +1, 0.0}, {2, -1, 1.0}, {0, +1, -G}, {0, -1, G}, {1, +1, -G}, {1, -1, G}};
-        WinVertex* other = polyB;
-        for (const ClipPlane& cp : planes) {
-            n = clipPolygon(poly, n, cp, other);
-            std::swap(poly, other);
-            if (n < 3) return flags | kRejected;
-        }
-    }
-
-    // Snap every polygon vertex once, then fan from vertex 0.
+// Snapped sub-triangles of the polygon poly[0..n) (snapped coordinates sx, sy), fanned from vertex
+// 0, all carrying the depth plane of the original triangle (v0, v1, v2). Returns how many of the
+// fan's triangles have non-zero snapped area (before dropping empty ones).
+int fanPolygon(const WinVertex* poly, int n, const int64_t* sx, const int64_t* sy, const WinVertex& v0,
+               const WinVertex& v1, const WinVertex& v2, const SetupParams& params, SnappedTri* out, int& count) {
     const int S = params.subpixelBits;
-    int64_t sx[kMaxPolygon], sy[kMaxPolygon];
-    for (int k = 0; k < n; ++k) {
-        sx[k] = snapToFixed(poly[k].x, S);
-        sy[k] = snapToFixed(poly[k].y, S);
-    }
     const double unit = std::ldexp(1.0, -S);
+    const int64_t half = int64_t(1) << (S - 1);
+    int nonZero = 0;
+    DepthPlane plane;  // of the whole (unclipped, unsnapped) triangle, computed on first use
+    int havePlane = -1;
     for (int k = 1; k + 1 < n; ++k) {
         int i0 = 0, i1 = k, i2 = k + 1;
         const int64_t area2 = (sx[i1] - sx[i0]) * (sy[i2] - sy[i0]) - (sx[i2] - sx[i0]) * (sy[i1] - sy[i0]);
         if (area2 == 0) continue;  // zero area after snapping: no fragment (counted by the caller)
+        ++nonZero;
+        if (params.dropEmpty) {
+            // No centre i*2^S + half within [min, max] in x or in y, or none inside the viewport.
+            const int64_t minx = std::min({sx[i0], sx[i1], sx[i2]}), maxx = std::max({sx[i0], sx[i1], sx[i2]});
+            const int64_t miny = std::min({sy[i0], sy[i1], sy[i2]}), maxy = std::max({sy[i0], sy[i1], sy[i2]});
+            const int64_t lox = std::max<int64_t>(-((half - minx) >> S), 0);
+            const int64_t hix = std::min<int64_t>((maxx - half) >> S, params.width - 1);
+            const int64_t loy = std::max<int64_t>(-((half - miny) >> S), 0);
+            const int64_t hiy = std::min<int64_t>((maxy - half) >> S, params.height - 1);
+            if (lox > hix || loy > hiy) continue;
+        }
+        if (havePlane < 0) havePlane = planeFrom(v0, v1, v2, plane) ? 1 : 0;
         if (area2 < 0) std::swap(i1, i2);  // both windings rasterize
         SnappedTri& t = out[count++];
         const int idx[3] = {i0, i1, i2};
@@ -123,7 +102,7 @@ uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex&
             t.x[v] = sx[idx[v]];
             t.y[v] = sy[idx[v]];
         }
-        if (havePlane) {
+        if (havePlane == 1) {
             t.plane = plane;
         } else {
             // Collinear in double but not after snapping: the plane of the snapped sub-triangle.
@@ -132,8 +111,67 @@ uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex&
             if (!planeFrom(s[0], s[1], s[2], t.plane)) t.plane = DepthPlane{s[0].x, s[0].y, s[0].z, 0.0, 0.0};
         }
     }
-    if (count == 0) flags |= kZeroArea;
-    return flags;
+    return nonZero;
+}
+
+}  // namespace
+
+bool trivialReject(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params) {
+    if (!finite(v0) || !finite(v1) || !finite(v2)) return true;
+    // All three vertices beyond one side of the viewport or the depth range. Beyond x < 0 every
+    // snapped x is <= 0, left of every centre (>= 1/2); likewise for the others.
+    const double W = params.width, H = params.height;
+    return (v0.x < 0 && v1.x < 0 && v2.x < 0) || (v0.x > W && v1.x > W && v2.x > W) ||
+           (v0.y < 0 && v1.y < 0 && v2.y < 0) || (v0.y > H && v1.y > H && v2.y > H) ||
+           (v0.z < 0 && v1.z < 0 && v2.z < 0) || (v0.z > 1 && v1.z > 1 && v2.z > 1);
+}
+
+bool insideClipVolume(const WinVertex& v, const SetupParams& params) {
+    const double G = guardBandPixels(params.subpixelBits);
+    return v.z >= 0 && v.z <= 1 && v.x >= -G && v.x <= G && v.y >= -G && v.y <= G;
+}
+
+uint8_t setupUnclipped(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],
+                       const int64_t sy[3], const SetupParams& params, SnappedTri out[kMaxSubTriangles], int& count) {
+    count = 0;
+    const WinVertex poly[3] = {v0, v1, v2};
+    return fanPolygon(poly, 3, sx, sy, v0, v1, v2, params, out, count) == 0 ? kZeroArea : 0;
+}
+
+uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params,
+                      SnappedTri out[kMaxSubTriangles], int& count) {
+    count = 0;
+    if (trivialReject(v0, v1, v2, params)) return kRejected;
+    const int S = params.subpixelBits;
+    if (insideClipVolume(v0, params) && insideClipVolume(v1, params) && insideClipVolume(v2, params)) {
+        const int64_t sx[3] = {snapToFixed(v0.x, S), snapToFixed(v1.x, S), snapToFixed(v2.x, S)};
+        const int64_t sy[3] = {snapToFixed(v0.y, S), snapToFixed(v1.y, S), snapToFixed(v2.y, S)};
+        return setupUnclipped(v0, v1, v2, sx, sy, params, out, count);
+    }
+
+    // Clipping against the depth range and the guard band.
+    const double G = guardBandPixels(S);
+    WinVertex polyA[kMaxPolygon];  // not value-initialized: cheap
+    WinVertex polyB[kMaxPolygon];
+    polyA[0] = v0;
+    polyA[1] = v1;
+    polyA[2] = v2;
+    WinVertex* poly = polyA;
+    WinVertex* other = polyB;
+    int n = 3;
+    const ClipPlane planes[6] = {{2, +1, 0.0}, {2, -1, 1.0}, {0, +1, -G}, {0, -1, G}, {1, +1, -G}, {1, -1, G}};
+    for (const ClipPlane& cp : planes) {
+        n = clipPolygon(poly, n, cp, other);
+        std::swap(poly, other);
+        if (n < 3) return kClipped | kRejected;
+    }
+    // Snap every polygon vertex once, then fan from vertex 0.
+    int64_t sx[kMaxPolygon], sy[kMaxPolygon];
+    for (int k = 0; k < n; ++k) {
+        sx[k] = snapToFixed(poly[k].x, S);
+        sy[k] = snapToFixed(poly[k].y, S);
+    }
+    return kClipped | (fanPolygon(poly, n, sx, sy, v0, v1, v2, params, out, count) == 0 ? kZeroArea : 0);
 }
 
 namespace {

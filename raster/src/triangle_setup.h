@@ -36,6 +36,10 @@ struct SetupParams {
     int subpixelBits = kDefaultSubpixelBits;
     int width = 1, height = 1;
     FillRule fillRule = FillRule::BottomLeft;
+    // Drop sub-triangles whose bounding box holds no pixel centre of the viewport (they cannot
+    // produce a fragment). The fast path sets it; the scalar reference path does not, so that it
+    // stays free of bounding-box logic. Flags are the same either way.
+    bool dropEmpty = false;
 };
 
 // A clipped triangle fans into at most 3 + 6 - 2 sub-triangles (six clip planes).
@@ -45,6 +49,14 @@ inline constexpr int kMaxSubTriangles = 7;
 // Non-finite window coordinates count as rejected.
 uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params,
                       SnappedTri out[kMaxSubTriangles], int& count);
+
+// The pieces of setupTriangle, for a caller that snaps each vertex once (the fast path):
+// setupTriangle(v) == kRejected if trivialReject(v); else, when every vertex is
+// insideClipVolume, setupUnclipped(v, snapped x, snapped y); else the clipping path.
+bool trivialReject(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params);
+bool insideClipVolume(const WinVertex& v, const SetupParams& params);
+uint8_t setupUnclipped(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],
+                       const int64_t sy[3], const SetupParams& params, SnappedTri out[kMaxSubTriangles], int& count);
 
 // The fast path's form of a snapped triangle: edge functions over pixel indices,
 // E_k(i, j) = a[k]*i + b[k]*j + c[k], with the fill rule folded into c so that the centre of

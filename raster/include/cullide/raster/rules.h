@@ -114,10 +114,12 @@ inline constexpr double guardBandPixels(int subpixelBits) {
 inline constexpr int kDefaultTileSize = 64;
 
 // Rule 3: v * 2^S rounded to nearest, ties towards +infinity, exactly. v*2^S is exact in double;
-// floor and the subtraction are exact for |v*2^S| < 2^52 (callers stay within the guard band).
+// the truncation, the floor correction and the subtraction are exact for |v*2^S| < 2^52 (callers
+// stay within the guard band).
 inline int64_t snapToFixed(double v, int subpixelBits) {
-    const double s = std::ldexp(v, subpixelBits);
-    const double f = std::floor(s);
+    const double s = v * double(int64_t(1) << subpixelBits);
+    double f = double(int64_t(s));  // truncation towards zero
+    if (f > s) f -= 1.0;            // floor
     return int64_t(f) + (s - f >= 0.5 ? 1 : 0);
 }
 
@@ -147,13 +149,11 @@ inline uint32_t encodeUnorm(double z, int bits) {
     const double a = z * double(uint64_t(1) << bits);  // exact (power of two), a in [0, 2^n]
     const double f = double(int64_t(a));                // floor, a >= 0
     const double r = a - f;                             // exact
-    int64_t k = int64_t(f);
-    if (r >= 0.5) {
-        if (r - 0.5 >= z) ++k;  // r - z >= 1/2 (tie: up)
-    } else if (r + 0.5 < z) {
-        --k;  // r - z < -1/2
-    }
-    return uint32_t(k);
+    // Branch-free (the hot loop calls this per fragment): up when r - z >= 1/2 (tie: up), down
+    // when r - z < -1/2. r - 1/2 is only used (and only exact) when r >= 1/2.
+    const int64_t up = int64_t((r >= 0.5) & (r - 0.5 >= z));
+    const int64_t down = int64_t((r < 0.5) & (r + 0.5 < z));
+    return uint32_t(int64_t(f) + up - down);
 }
 
 // Rule 7: the stored representation of a window depth (clamped first).
