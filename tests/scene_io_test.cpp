@@ -84,7 +84,7 @@ TEST_P(SceneIoBad, ThrowsInputErrorNamingSceneAndCause) {
 }
 
 INSTANTIATE_TEST_SUITE_P(
-    AllClasses, SceneIoBad,
+    SceneIo, SceneIoBad,
     ::testing::Values(BadScene{"bad/malformed.json", "malformed JSON at line 3, column 47"},
                       BadScene{"bad/missing_key.json", "objects[0]: missing key 'mesh'"},
                       BadScene{"bad/wrong_type.json", "objects[0].transform.scale: expected a number or an array of 3 numbers, got string"},
