@@ -167,6 +167,33 @@ TEST(MeshIo, HugeHeaderCountsFailFastWithoutAllocating) {
     EXPECT_THROW(loadMesh(dir / "d.ply"), InputError);
 }
 
+// Trap: tinyobjloader stores a face's vertex count in an unsigned char, so a 300-gon would come
+// back truncated; the loader must notice the disagreement with its own scan and refuse.
+TEST(MeshIo, ObjFaceLongerThanTinyobjloaderCanHoldIsRefused) {
+    TempDir dir;
+    std::string obj;
+    for (int i = 0; i < 300; ++i) {
+        obj += "v ";
+        obj += std::to_string(std::cos(i * 0.02));
+        obj += ' ';
+        obj += std::to_string(std::sin(i * 0.02));
+        obj += " 0\n";
+    }
+    obj += "f";
+    for (int i = 1; i <= 300; ++i) {
+        obj += ' ';
+        obj += std::to_string(i);
+    }
+    obj += "\n";
+    spit(dir / "big.obj", obj);
+    try {
+        (void)loadMesh(dir / "big.obj");
+        FAIL();
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("refusing"), std::string::npos) << e.what();
+    }
+}
+
 // Trap: extensions in upper case are still meshes; anything else is refused by name.
 TEST(MeshIo, FormatFromExtensionIgnoresCase) {
     EXPECT_EQ(meshFormatFromPath("a/B.OFF"), MeshFormat::Off);
