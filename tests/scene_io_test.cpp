@@ -97,7 +97,10 @@ INSTANTIATE_TEST_SUITE_P(
                       BadScene{"bad/nonfinite_transform.json", "is not a finite float"},
                       BadScene{"bad/does_not_exist.json", "no such file"},
                       BadScene{"bad/unknown_extension.xyz", "unknown scene format"},
-                      BadScene{"bad/nan.off", "non-finite"}));
+                      BadScene{"bad/nan.off", "non-finite"}),
+    // Stable, readable names (the default prints the pointers, which change with ASLR and make
+    // CTest's discovered names miss the tests).
+    [](const auto& info) { return cullide::test::paramName(info.param.file); });
 
 // Trap: writeScene output that does not load back to the same animation (bit for bit: meshes,
 // transforms, per-frame positions), or whose bytes differ between two writes.

@@ -1,3 +1,4 @@
+#include <cctype>
 #include "test_util.h"
 
 #include <atomic>
@@ -24,6 +25,16 @@ TempDir::TempDir() {
 TempDir::~TempDir() {
     std::error_code ec;
     std::filesystem::remove_all(path_, ec);
+}
+
+}  // namespace cullide::test
+
+namespace cullide::test {
+
+std::string paramName(const std::string& path) {
+    std::string name;
+    for (char c : path) name += (std::isalnum(static_cast<unsigned char>(c)) ? c : '_');
+    return name;
 }
 
 }  // namespace cullide::test

@@ -9,6 +9,10 @@ namespace cullide::test {
 // CULLIDE_TEST_DATA_DIR "/" relative, e.g. testData("good/polys.off").
 std::string testData(const char* relative);
 
+// A test-name-safe form of a data file's path ("bad/nan.off" -> "bad_nan_off"), for
+// parameterized tests' names.
+std::string paramName(const std::string& path);
+
 // A fresh, empty folder under the system temp folder, removed (with its contents) on destruction.
 class TempDir {
 public:
