@@ -173,12 +173,7 @@ public:
             pcs = std::move(next);
         }
 
-        for (const Item& it : pcs) {
-            const Hierarchy& h = hierarchies_[it.object];
-            const HierarchyNode& n = node(it);
-            for (uint32_t k = n.first; k < n.first + n.count; ++k) result.pcs.push_back({it.object, h.order[k]});
-        }
-        std::sort(result.pcs.begin(), result.pcs.end());
+        result.pcs = expand(pcs);
         result.totalSeconds = secondsSince(start);
         return result;
     }
@@ -218,6 +213,18 @@ private:
             }
         }
         backend_.setGeometry(positions_, triangles_);
+    }
+
+    // The triangles of the given nodes, as (object, triangle) sorted.
+    std::vector<PcsTriangle> expand(const std::vector<Item>& items) const {
+        std::vector<PcsTriangle> out;
+        for (const Item& it : items) {
+            const Hierarchy& h = hierarchies_[it.object];
+            const HierarchyNode& n = node(it);
+            for (uint32_t k = n.first; k < n.first + n.count; ++k) out.push_back({it.object, h.order[k]});
+        }
+        std::sort(out.begin(), out.end());
+        return out;
     }
 
     const HierarchyNode& node(const Item& it) const { return hierarchies_[it.object].nodes[it.node]; }
@@ -310,6 +317,7 @@ private:
         st.queries = list_.queryCount();
         st.seconds = secondsSince(start);
         passes.push_back(st);
+        if (opt_.onPass) opt_.onPass(st, expand(kept));
         return kept;
     }
 

@@ -76,4 +76,14 @@ void writeMaskPng(int width, int height, std::span<const uint8_t> mask, const st
     writeRaw(path, width, height, 3, px);
 }
 
+void writeRgbPng(int width, int height, std::span<const uint8_t> rgb, const std::filesystem::path& path) {
+    if (width <= 0 || height <= 0 || rgb.size() != size_t(width) * size_t(height) * 3)
+        throw InputError(path.string(), "RGB image has the wrong size");
+    std::vector<uint8_t> flipped(rgb.size());
+    const size_t row = size_t(width) * 3;
+    for (int y = 0; y < height; ++y)
+        std::copy_n(rgb.data() + size_t(height - 1 - y) * row, row, flipped.data() + size_t(y) * row);
+    writeRaw(path, width, height, 3, flipped);
+}
+
 }  // namespace cullide::raster

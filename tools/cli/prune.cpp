@@ -2,6 +2,7 @@
 // the seed paper's self-intersection variant, with per-pass statistics.
 #include "commands.h"
 #include "output.h"
+#include "pictures.h"
 
 #include "cullide/cullide.h"
 #include "cullide/error.h"
@@ -12,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <string>
 
@@ -32,6 +34,7 @@ struct PruneOptions {
     int threads = 0;
     long frame = -1;  // -1: every frame
     std::string json, out;
+    std::string frames;  // folder for the Figure 12 pictures
 };
 
 // "500" or "640x480".
@@ -118,7 +121,26 @@ int runPrune(const PruneOptions& o) {
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
     for (size_t f = first; f < last; ++f) {
         const Scene scene = animation.sceneAt(f);
-        const CullideResult r = runCullide(scene, *backend, options);
+        CullideOptions frameOptions = options;
+        std::unique_ptr<PcsPictures> pictures;
+        if (!o.frames.empty()) {
+            // The paper's Figure 12: the PCS after each reducePCS, from a fixed three-quarter view.
+            std::error_code ec;
+            std::filesystem::create_directories(o.frames, ec);
+            if (ec) throw InputError(o.frames, "cannot create the folder: " + ec.message());
+            pictures = std::make_unique<PcsPictures>(scene, Vec3d(-0.4, -0.5, -0.77), 512, 512);
+            char name[64];
+            std::snprintf(name, sizeof name, "frame%04zu_pass%03d.png", f, 0);
+            std::vector<PcsTriangle> everything;
+            for (uint32_t i = 0; i < scene.objects.size(); ++i)
+                for (uint32_t t = 0; t < scene.objects[i].mesh.triangleCount(); ++t) everything.push_back({i, t});
+            pictures->write(everything, std::filesystem::path(o.frames) / name);
+            frameOptions.onPass = [&, pass = 0](const PassStats&, std::span<const PcsTriangle> pcs) mutable {
+                std::snprintf(name, sizeof name, "frame%04zu_pass%03d.png", f, ++pass);
+                pictures->write(pcs, std::filesystem::path(o.frames) / name);
+            };
+        }
+        const CullideResult r = runCullide(scene, *backend, frameOptions);
         size_t rendered = 0, queries = 0;
         for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
         std::map<uint32_t, size_t> perObject;
@@ -186,6 +208,9 @@ void addPruneCommand(CLI::App& app, Action& action) {
     sub->add_option("--frame", o->frame, "Prune only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
     sub->add_option("--json", o->json, "Write the PCS ([object, triangle] pairs), per-pass stats and times as JSON");
     sub->add_option("--out", o->out, "Write the frame as PLY with PCS triangles coloured green");
+    sub->add_option("--frames", o->frames,
+                    "Write PNG pictures of the PCS before and after each reducePCS call into this folder "
+                    "(frameFFFF_passPPP.png; the paper's Figure 12)");
     sub->callback([o, &action] { action = [o] { return runPrune(*o); }; });
 }
 

@@ -30,6 +30,8 @@
 #include "cullide/scene.h"
 
 #include <cstdint>
+#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -56,17 +58,6 @@ std::vector<Vec3d> spreadDirections(uint32_t n);
 // Parses "axes", "N" (spread), or a list "x,-y,z" / "1 0 0;0 1 1" of directions; InputError.
 std::vector<Vec3d> parseDirections(const std::string& text);
 
-struct CullideOptions {
-    CullMethod method = CullMethod::Modified;
-    std::vector<Vec3d> directions = axisDirections();
-    int width = 500, height = 500;
-    DepthFormat depth = DepthFormat::unorm(24);
-    HierarchyOptions hierarchy;
-    // Throws InputError naming the option on absurd values (no directions, a zero or non-finite
-    // direction, a viewport outside 1..16384).
-    void validate() const;
-};
-
 // One reducePCS call: the data behind the paper's Figures 9-11.
 struct PassStats {
     uint32_t level = 0;        // hierarchy depth of the PCS nodes' level (0: objects)
@@ -81,6 +72,21 @@ struct PassStats {
 struct PcsTriangle {
     uint32_t object = 0, triangle = 0;  // the object's index in the scene, the triangle's in its mesh
     friend auto operator<=>(const PcsTriangle&, const PcsTriangle&) = default;
+};
+
+struct CullideOptions {
+    CullMethod method = CullMethod::Modified;
+    std::vector<Vec3d> directions = axisDirections();
+    int width = 500, height = 500;
+    DepthFormat depth = DepthFormat::unorm(24);
+    HierarchyOptions hierarchy;
+    // Called after every reducePCS call with its statistics and the PCS it left (sorted by
+    // object, then triangle), e.g. to draw the paper's Figure 12. Costs a PCS expansion per
+    // call when set; nothing when empty.
+    std::function<void(const PassStats&, std::span<const PcsTriangle>)> onPass;
+    // Throws InputError naming the option on absurd values (no directions, a zero or non-finite
+    // direction, a viewport outside 1..16384).
+    void validate() const;
 };
 
 struct CullideResult {

@@ -29,4 +29,7 @@ void writeDepthPng(const DepthImage& image, const std::filesystem::path& path, c
 // Meant for coverage counts (0 = hole, 1 = covered once, 2 = covered twice) and diffs.
 void writeMaskPng(int width, int height, std::span<const uint8_t> mask, const std::filesystem::path& path);
 
+// Writes a width x height RGB image (row 0 at the bottom, 3 bytes per pixel) as PNG.
+void writeRgbPng(int width, int height, std::span<const uint8_t> rgb, const std::filesystem::path& path);
+
 }  // namespace cullide::raster
