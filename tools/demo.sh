@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The main job on the bundled data, from a fresh Debian 12 machine: installs the Debian packages
 # (tools/setup.sh), builds cullide in Release, generates the paper's two scenes at ~5,000
-# triangles (make-scene; same seed, same bytes) and describes every bundled and generated scene
-# with `cullide info`.
+# triangles (make-scene; same seed, same bytes), describes every scene with `cullide info`, and
+# prunes the paper's scenes and the bundled animation with the self-intersection variant
+# (`cullide prune`, 500x500, D24, the six axis directions), writing the PCS as JSON and as a
+# coloured PLY (the paper's Figures 6 and 7) and the pruning pictures (Figure 12) into out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,3 +22,11 @@ echo "== demo: generate the paper's scenes into out/scenes"
 
 echo "== demo: cullide info over the bundled and generated scenes"
 "$cullide" info data/scenes/*.json data/meshes/*.off out/scenes/*.json
+
+echo "== demo: cullide prune (modified method: self-intersections stay in the PCS)"
+"$cullide" prune out/scenes/bunny_5k.json --json out/bunny_5k_pcs.json --out out/bunny_5k_pcs.ply --frames out/bunny_5k_frames
+"$cullide" prune out/scenes/cows_5k.json --json out/cows_5k_pcs.json --out out/cows_5k_pcs.ply
+"$cullide" prune data/scenes/bunny_through_cow.json --json out/bunny_through_cow_pcs.json
+echo "== demo: cullide prune --method original (Cullide: contacts between objects, no self-intersections)"
+"$cullide" prune data/scenes/bunny_through_cow.json --method original --frame 4
+echo "== demo: outputs in out/ (PCS JSON, PLY with PCS triangles green, PNG pictures)"
