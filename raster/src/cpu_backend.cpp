@@ -86,6 +86,32 @@ struct alignas(64) TileOut {
     uint64_t fragments = 0, passed = 0;
 };
 
+// Every parallel loop of the backend: one phase, whose tasks touch disjoint data; phases follow
+// each other. Under ThreadSanitizer the joins inside libtbb.so (not instrumented) are invisible,
+// so each phase is annotated: the caller's history happens-before every task of the phase, and
+// every task happens-before the caller's continuation. Tasks of one phase are NOT ordered with
+// each other, so races inside a phase are still reported.
+#if defined(__SANITIZE_THREAD__)
+extern "C" void __tsan_acquire(void* addr);
+extern "C" void __tsan_release(void* addr);
+template <typename Body>
+void parallelFor(size_t begin, size_t end, size_t grain, const Body& body) {
+    static char before, after;  // sync objects (only their addresses matter)
+    __tsan_release(&before);
+    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, grain), [&](const tbb::blocked_range<size_t>& r) {
+        __tsan_acquire(&before);
+        body(r);
+        __tsan_release(&after);
+    });
+    __tsan_acquire(&after);
+}
+#else
+template <typename Body>
+void parallelFor(size_t begin, size_t end, size_t grain, const Body& body) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, grain), body);
+}
+#endif
+
 // The hot loop: one record clipped to a pixel rectangle (inclusive bounds).
 template <DepthFunc F, bool Float>
 void rasterizeInTile(const EdgeTri& t, int bx0, int by0, int bx1, int by1, uint32_t* depth, size_t stride, bool mask,
@@ -210,7 +236,7 @@ public:
                                                      " triangles");
         stats_ = RasterStats{};
         std::vector<uint64_t> results;
-        arena_.execute([&] {
+        inArena([&] {
             updateWindow();
             if (options_.scalarReference)
                 results = detail::executeReference(list, window_, triangles_, params_, view_.depth, state_, depth_,
@@ -236,7 +262,7 @@ private:
         if (windowValid_) return;
         window_.resize(positions_.size());
         snapped_.resize(positions_.size());
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, positions_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+        parallelFor(0, positions_.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t v = r.begin(); v != r.end(); ++v) {
                 const Vec3d w = view_.toWindow(positions_[v]);
                 window_[v] = {w.x(), w.y(), w.z()};
@@ -302,7 +328,7 @@ private:
             chunkTiles_.resize(chunks_.size());
         }
         const int ts = options_.tileSize;
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks_.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+        parallelFor(0, chunks_.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
             SnappedTri sub[detail::kMaxSubTriangles];
             for (size_t ci = r.begin(); ci != r.end(); ++ci) {
                 std::vector<EdgeTri>& recs = chunkRecords_[ci];
@@ -343,7 +369,7 @@ private:
         CULLIDE_CHECK(total < size_t(UINT32_MAX), "too many triangle records for 32-bit indices");
         records_.resize(total);
         recTiles_.resize(total);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks_.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+        parallelFor(0, chunks_.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t ci = r.begin(); ci != r.end(); ++ci) {
                 const uint32_t off = uint32_t(chunkOffset_[ci]);
                 std::copy(chunkRecords_[ci].begin(), chunkRecords_[ci].end(), records_.begin() + off);
@@ -364,7 +390,7 @@ private:
         const size_t nChunks = std::clamp<size_t>((n + kBinChunk - 1) / kBinChunk, 1, kMaxBinChunks);
         const size_t per = (n + nChunks - 1) / nChunks;
         binCounts_.assign(nChunks * tiles, 0);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, nChunks, 1), [&](const tbb::blocked_range<size_t>& r) {
+        parallelFor(0, nChunks, 1, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t c = r.begin(); c != r.end(); ++c) {
                 uint32_t* counts = binCounts_.data() + c * tiles;
                 for (size_t i = c * per; i < std::min(n, (c + 1) * per); ++i) {
@@ -387,7 +413,7 @@ private:
         CULLIDE_CHECK(running < uint64_t(UINT32_MAX), "too many tile entries for 32-bit indices");
         start[tiles] = uint32_t(running);
         items.resize(running);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, nChunks, 1), [&](const tbb::blocked_range<size_t>& r) {
+        parallelFor(0, nChunks, 1, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t c = r.begin(); c != r.end(); ++c) {
                 uint32_t* cursor = binCounts_.data() + c * tiles;
                 for (size_t i = c * per; i < std::min(n, (c + 1) * per); ++i) {
@@ -445,7 +471,7 @@ private:
         }
         // Tile rectangles of the draws and their setup statistics, O(triangles drawn).
         eventStats_.assign(events_.size(), {0, 0, 0});
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, events_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+        parallelFor(0, events_.size(), 256, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t k = r.begin(); k != r.end(); ++k) {
                 Event& e = events_[k];
                 if (e.clear) continue;
@@ -479,7 +505,7 @@ private:
         const bool isFloat = view_.depth.kind == DepthFormat::Kind::Float32;
         const std::array<RasterFn, 8> table = isFloat ? rasterTable<true>() : rasterTable<false>();
         const int bits = view_.depth.bits, ts = options_.tileSize, W = view_.width, H = view_.height;
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles, 1), [&](const tbb::blocked_range<size_t>& r) {
+        parallelFor(0, tiles, 1, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t tile = r.begin(); tile != r.end(); ++tile) {
                 TileOut& out = tileOut_[tile];
                 out.queries.clear();
@@ -533,6 +559,23 @@ private:
         for (size_t q = 0; q < results.size(); ++q)
             if (kinds[q] == QueryKind::AnySamplesPassed) results[q] = results[q] > 0 ? 1 : 0;
         return results;
+    }
+
+    // arena_.execute(f), with the hand-over annotated for ThreadSanitizer (see parallelFor).
+    template <typename F>
+    void inArena(const F& f) {
+#if defined(__SANITIZE_THREAD__)
+        static char before, after;
+        __tsan_release(&before);
+        arena_.execute([&] {
+            __tsan_acquire(&before);
+            f();
+            __tsan_release(&after);
+        });
+        __tsan_acquire(&after);
+#else
+        arena_.execute(f);
+#endif
     }
 
     CpuBackendOptions options_;
