@@ -36,45 +36,45 @@ namespace {
 
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 
-// Face adjacency through shared edges (by vertex index), as compressed rows. Triangles on a
-// non-manifold edge are all adjacent to each other; degenerate edges (a == b) connect nothing.
+// Face adjacency through shared edges (by vertex index), as compressed rows, neighbours in
+// increasing triangle order. Triangles on a non-manifold edge are all adjacent to each other;
+// degenerate edges (a == b) connect nothing. Built from the vertex -> triangle incidence (linear
+// time, no sort): the triangles sharing edge (a, b) are among those incident to a.
 struct Adjacency {
     std::vector<uint32_t> start, next;
 
-    Adjacency(const Mesh& mesh) {
-        const size_t n = mesh.triangles.size();
-        struct Edge {
-            uint32_t a, b, t;
-        };
-        std::vector<Edge> edges;
-        edges.reserve(3 * n);
+    explicit Adjacency(const Mesh& mesh) {
+        const size_t n = mesh.triangles.size(), nv = mesh.positions.size();
+        std::vector<uint32_t> vstart(nv + 1, 0), incident;
+        for (const Triangle& tri : mesh.triangles)
+            for (uint32_t v : tri) ++vstart[v + 1];
+        for (size_t v = 0; v < nv; ++v) vstart[v + 1] += vstart[v];
+        incident.resize(vstart[nv]);
+        std::vector<uint32_t> fill(vstart.begin(), vstart.end() - 1);
+        for (uint32_t t = 0; t < n; ++t)
+            for (uint32_t v : mesh.triangles[t]) incident[fill[v]++] = t;  // increasing t per vertex
+
+        start.assign(n + 1, 0);
+        next.reserve(3 * n);
+        std::vector<uint32_t> row;
         for (uint32_t t = 0; t < n; ++t) {
             const Triangle& tri = mesh.triangles[t];
+            row.clear();
             for (int e = 0; e < 3; ++e) {
-                uint32_t a = tri[e], b = tri[(e + 1) % 3];
+                const uint32_t a = tri[e], b = tri[(e + 1) % 3];
                 if (a == b) continue;
-                if (a > b) std::swap(a, b);
-                edges.push_back({a, b, t});
+                for (uint32_t k = vstart[a]; k < vstart[a + 1]; ++k) {
+                    const uint32_t u = incident[k];
+                    if (u == t) continue;
+                    const Triangle& other = mesh.triangles[u];
+                    if (other[0] == b || other[1] == b || other[2] == b) row.push_back(u);
+                }
             }
+            std::sort(row.begin(), row.end());
+            row.erase(std::unique(row.begin(), row.end()), row.end());
+            next.insert(next.end(), row.begin(), row.end());
+            start[t + 1] = uint32_t(next.size());
         }
-        std::sort(edges.begin(), edges.end(),
-                  [](const Edge& x, const Edge& y) { return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.t < y.t; });
-        std::vector<std::pair<uint32_t, uint32_t>> pairs;
-        for (size_t i = 0; i < edges.size();) {
-            size_t j = i;
-            while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b) ++j;
-            for (size_t p = i; p < j; ++p)
-                for (size_t q = i; q < j; ++q)
-                    if (edges[p].t != edges[q].t) pairs.push_back({edges[p].t, edges[q].t});
-            i = j;
-        }
-        std::sort(pairs.begin(), pairs.end());
-        pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-        start.assign(n + 1, 0);
-        for (const auto& p : pairs) ++start[p.first + 1];
-        for (size_t t = 0; t < n; ++t) start[t + 1] += start[t];
-        next.resize(pairs.size());
-        for (size_t i = 0; i < pairs.size(); ++i) next[i] = pairs[i].second;  // pairs sorted by first
     }
 };
 
@@ -146,7 +146,8 @@ private:
     // proportion to its share of the k parts; the second part is the rest, whose stray pieces
     // (cut off from its largest piece, so bordered by the first part) move to the first part.
     // Sizes are therefore near-equal, not exact.
-    void partition(std::span<uint32_t> set, uint32_t k, std::vector<uint32_t>& sizes) {
+    // `hint`: a triangle of `set` on its periphery, when the caller knows one (kNone otherwise).
+    void partition(std::span<uint32_t> set, uint32_t k, std::vector<uint32_t>& sizes, uint32_t hint = kNone) {
         if (k < 2 || set.size() < 2) {
             sizes.push_back(uint32_t(set.size()));
             return;
@@ -155,7 +156,7 @@ private:
         const size_t target = std::max<size_t>(1, set.size() * half / k);
 
         for (uint32_t t : set) label_[t] = kOpen;
-        const uint32_t seed = farthest(set[0]);
+        const uint32_t seed = hint != kNone ? hint : farthest(set[0]);
         // Breadth-first order over the set from the seed; when a component is exhausted, go on
         // from the first unvisited triangle of the set (in set order).
         std::vector<uint32_t> bfs;
@@ -196,8 +197,12 @@ private:
         }
         for (uint32_t t : set) label_[t] = kNone;
         std::copy(second.begin(), second.end(), std::copy(first.begin(), first.end(), set.begin()));
-        partition(set.subspan(0, first.size()), half, sizes);
-        partition(set.subspan(first.size()), k - half, sizes);
+        // Peripheral starts for the halves, for free: the first part is a ball around the seed
+        // whose last-reached triangle lies on its rim; the second part's first triangle borders
+        // the first part. (The second part is a breadth-first order too, so its rim is its end.)
+        const uint32_t firstHint = first.back(), secondHint = second.back();
+        partition(set.subspan(0, first.size()), half, sizes, firstHint);
+        partition(set.subspan(first.size()), k - half, sizes, secondHint);
     }
 
     // The triangle labelled kOpen farthest in hops from `from` over kOpen triangles (ties: the

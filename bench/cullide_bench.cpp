@@ -1,0 +1,72 @@
+// Benchmarks of the Cullide loop (core/cullide.cpp) on the CPU reference backend.
+//
+//   BM_Prune/<scene>/<triangles>/<method>/<threads>: one full `cullide prune` of a frame: world
+//     meshes, hierarchies (connectivity, leaf 16, branching 4), geometry upload and every
+//     reducePCS call (six axis directions, 500 x 500, D24), as the paper measures it (its
+//     Figure 8: bunny 20-600 ms, cows 35-1000 ms for 5k-270k triangles on a 2004 GPU).
+//     scene 0 = the deformed bunny (make-scene bunny), 1 = two cows merged into one object
+//     (make-scene cows); method 0 = original, 1 = modified. Counters: PCS triangles, reducePCS
+//     calls, triangles rendered, queries.
+//   BM_Hierarchy/<kind>/<triangles>: building one object's hierarchy (the per-frame cost the
+//     paper's method pays instead of preprocessing); kind 0 = connectivity, 1 = random.
+#include "cullide/cullide.h"
+#include "cullide/generators.h"
+#include "cullide/mesh_io.h"
+#include "cullide/raster/cpu_backend.h"
+
+#include <benchmark/benchmark.h>
+
+#include <map>
+
+namespace {
+
+using namespace cullide;
+
+const Scene& paperScene(int which, size_t triangles) {
+    static std::map<std::pair<int, size_t>, Scene> cache;
+    auto it = cache.find({which, triangles});
+    if (it == cache.end()) {
+        SceneRequest r;
+        r.triangles = triangles;
+        const Mesh source = loadMesh(std::string(CULLIDE_DATA_DIR) + (which == 0 ? "/meshes/bunny.off" : "/meshes/cow.off"));
+        Animation a = which == 0 ? makeDeformedBunny(source, r) : makeTwoCows(source, r);
+        it = cache.emplace(std::make_pair(which, triangles), a.sceneAt(0)).first;
+    }
+    return it->second;
+}
+
+void BM_Prune(benchmark::State& state) {
+    const Scene& scene = paperScene(int(state.range(0)), size_t(state.range(1)));
+    raster::CpuBackendOptions bo;
+    bo.threads = int(state.range(3));
+    auto backend = raster::makeCpuBackend(bo);
+    CullideOptions o;
+    o.method = state.range(2) == 0 ? CullMethod::Original : CullMethod::Modified;
+    CullideResult r;
+    for (auto _ : state) r = runCullide(scene, *backend, o);
+    size_t rendered = 0, queries = 0;
+    for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
+    state.counters["triangles"] = double(scene.triangleCount());
+    state.counters["pcs"] = double(r.pcs.size());
+    state.counters["calls"] = double(r.passes.size());
+    state.counters["rendered"] = double(rendered);
+    state.counters["queries"] = double(queries);
+    state.counters["hier_ms"] = 1e3 * r.hierarchySeconds;
+}
+BENCHMARK(BM_Prune)
+    ->ArgNames({"scene", "tris", "method", "threads"})
+    ->ArgsProduct({{0, 1}, {5000, 270000}, {0, 1}, {1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_Hierarchy(benchmark::State& state) {
+    const Scene& scene = paperScene(0, size_t(state.range(1)));
+    HierarchyOptions o;
+    o.kind = state.range(0) == 0 ? HierarchyKind::Connectivity : HierarchyKind::Random;
+    const Mesh& mesh = scene.objects[0].mesh;
+    for (auto _ : state) benchmark::DoNotOptimize(buildHierarchy(mesh, o));
+    state.counters["Mtri/s"] = benchmark::Counter(double(mesh.triangleCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Hierarchy)->ArgNames({"kind", "tris"})->ArgsProduct({{0, 1}, {5000, 270000}})->Unit(benchmark::kMillisecond);
+
+}  // namespace
