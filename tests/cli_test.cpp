@@ -179,3 +179,59 @@ TEST(Cli, MakeSceneWithBadMeshWritesNothing) {
     EXPECT_NE(r.output.find("/nonexistent.off"), std::string::npos) << r.output;
     EXPECT_TRUE(fs::is_empty(d)) << "files were written although the input was bad";
 }
+
+// Every prune option's absurd values are refused by name before any work, exit status 2.
+TEST(Cli, PruneRefusesBadOptions) {
+    const std::string scene = quote(kData + "/meshes/cow.off");
+    const std::pair<std::string, std::string> cases[] = {
+        {"--resolution 0", "--resolution"},        {"--resolution 20000", "--resolution"},
+        {"--resolution 10x", "--resolution"},      {"--resolution axb", "--resolution"},
+        {"--depth 7", "--depth"},                  {"--depth 33", "--depth"},
+        {"--depth half", "--depth"},               {"--directions '0 0 0'", "--directions"},
+        {"--directions x,w", "--directions"},      {"--directions 0", "--directions"},
+        {"--method reliable-ish", "--method"},     {"--hierarchy octree", "--hierarchy"},
+        {"--leaf-size 0", "--leaf-size"},          {"--branching 1", "--branching"},
+        {"--threads -1", "--threads"},             {"--frame 3", "--frame"},
+        {"--backend vulkan", "--backend"},
+    };
+    for (const auto& [args, needle] : cases) {
+        const CliRun r = cullide("prune " + scene + " " + args);
+        EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+        EXPECT_NE(r.output.find(needle), std::string::npos) << args << ": " << r.output;
+    }
+}
+
+// prune --json: the PCS as sorted [object, triangle] pairs inside the scene, per-pass statistics
+// whose triangle counts chain (each call's output is the next call's input within a level), and
+// the same PCS for 1 and 2 threads; --out writes a PLY with one colour per face.
+TEST(Cli, PruneJsonAndPly) {
+    const fs::path d = freshDir("prune");
+    const std::string scene = quote(kData + "/scenes/bunny_through_cow.json");
+    std::string pcs[2];
+    for (int threads : {1, 2}) {
+        const std::string json = (d / ("pcs" + std::to_string(threads) + ".json")).string();
+        const CliRun r = cullide("prune " + scene + " --frame 4 --resolution 200 --threads " + std::to_string(threads) +
+                                 " --json " + quote(json) + " --out " + quote((d / "pcs.ply").string()));
+        ASSERT_EQ(r.status, 0) << r.output;
+        const auto j = nlohmann::json::parse(readAll(json));
+        const auto& frame = j.at("frames").at(0);
+        EXPECT_EQ(frame.at("frame").get<int>(), 4);
+        const auto& list = frame.at("pcs");
+        ASSERT_GT(list.size(), 0u) << "the bunny crosses the cow in frame 4";
+        std::vector<std::pair<uint32_t, uint32_t>> pairs;
+        for (const auto& p : list) pairs.push_back({p.at(0).get<uint32_t>(), p.at(1).get<uint32_t>()});
+        EXPECT_TRUE(std::is_sorted(pairs.begin(), pairs.end()));
+        EXPECT_LT(pairs.back().first, 2u);
+        const auto& passes = frame.at("passes");
+        ASSERT_GT(passes.size(), 1u);
+        for (size_t i = 1; i < passes.size(); ++i)
+            if (passes[i].at("level") == passes[i - 1].at("level"))
+                EXPECT_EQ(passes[i].at("triangles_in"), passes[i - 1].at("triangles_out"));
+        EXPECT_EQ(passes.back().at("triangles_out").get<size_t>(), list.size());
+        pcs[threads - 1] = list.dump();
+    }
+    EXPECT_EQ(pcs[0], pcs[1]) << "PCS differs between 1 and 2 threads";
+    const std::string ply = readAll(d / "pcs.ply");
+    EXPECT_EQ(ply.rfind("ply\n", 0), 0u);
+    EXPECT_NE(ply.find("property uchar red"), std::string::npos);
+}
