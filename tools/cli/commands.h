@@ -17,5 +17,6 @@ using Action = std::function<int()>;
 void addInfoCommand(CLI::App& app, Action& action);
 void addMakeSceneCommand(CLI::App& app, Action& action);
 void addPruneCommand(CLI::App& app, Action& action);
+void addValidateCommand(CLI::App& app, Action& action);
 
 }  // namespace cullide::cli

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
     cullide::cli::addInfoCommand(app, action);
     cullide::cli::addMakeSceneCommand(app, action);
     cullide::cli::addPruneCommand(app, action);
+    cullide::cli::addValidateCommand(app, action);
 
     try {
         app.parse(argc, argv);

@@ -8,6 +8,7 @@
 #include "cullide/error.h"
 #include "cullide/mesh_io.h"
 #include "cullide/raster/cpu_backend.h"
+#include "cullide/raster/gl_backend.h"
 #include "cullide/scene_io.h"
 
 #include <nlohmann/json.hpp>
@@ -102,7 +103,8 @@ int runPrune(const PruneOptions& o) {
     const CullideOptions options = cullideOptions(o);
     raster::CpuBackendOptions bo;
     bo.threads = o.threads;
-    const std::unique_ptr<DepthBackend> backend = raster::makeCpuBackend(bo);
+    const std::unique_ptr<DepthBackend> backend =
+        o.backend == "gl" ? std::unique_ptr<DepthBackend>(raster::makeGlBackend()) : raster::makeCpuBackend(bo);
 
     const Animation animation = loadScene(o.scene);
     if (o.frame >= 0 && size_t(o.frame) >= animation.frameCount())
@@ -201,8 +203,8 @@ void addPruneCommand(CLI::App& app, Action& action) {
         ->check(CLI::Range(2u, 64u))
         ->capture_default_str();
     sub->add_option("--seed", o->seed, "Seed of the random hierarchy");
-    sub->add_option("--backend", o->backend, "cpu (the reference rasterizer)")
-        ->check(CLI::IsMember({"cpu"}))
+    sub->add_option("--backend", o->backend, "cpu (the reference rasterizer) | gl (OpenGL 4.5 through headless EGL)")
+        ->check(CLI::IsMember({"cpu", "gl"}))
         ->capture_default_str();
     sub->add_option("--threads", o->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));
     sub->add_option("--frame", o->frame, "Prune only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
