@@ -18,5 +18,6 @@ void addInfoCommand(CLI::App& app, Action& action);
 void addMakeSceneCommand(CLI::App& app, Action& action);
 void addPruneCommand(CLI::App& app, Action& action);
 void addValidateCommand(CLI::App& app, Action& action);
+void addOracleCommand(CLI::App& app, Action& action);
 
 }  // namespace cullide::cli

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
     cullide::cli::addMakeSceneCommand(app, action);
     cullide::cli::addPruneCommand(app, action);
     cullide::cli::addValidateCommand(app, action);
+    cullide::cli::addOracleCommand(app, action);
 
     try {
         app.parse(argc, argv);

@@ -1,0 +1,94 @@
+// The exact oracle: which triangles of a scene truly intersect, and how.
+//
+// References
+//   - P. Guigue, O. Devillers: Fast and robust triangle-triangle overlap test using orientation
+//     predicates. Journal of Graphics Tools 8(1), 2003 (the narrow phase; predicates.h).
+//   - CGAL 5.5 Polygon_mesh_processing::self_intersections (the rules for faces that share
+//     vertices, which we follow so that both can be compared pair for pair).
+//   - Embree 3 rtcCollide (the broad phase: user geometry, one float box per triangle).
+//   - ../shared/notes/oracle.md; the full rules are in docs/oracle.md.
+//
+// Conventions
+//   - The oracle decides on exactly the coordinates the culler uses: Scene::worldMesh(i), in
+//     float, converted to double (exact). No epsilon anywhere: every sign comes from an exact
+//     orientation predicate (a float filter with Shewchuk's error bound, then CGAL's Epick).
+//   - Pairs: self pairs (two triangles of one object) and pairs between objects. Each unordered
+//     pair is reported once, as (objectA, triangleA) < (objectB, triangleB), the list sorted.
+//   - Sharing (self pairs only) is by vertex index, as CGAL does by mesh connectivity:
+//       3 shared indices (a duplicated face): intersecting, touching.
+//       2 shared (an edge): intersecting iff the four corners are coplanar and the two
+//         opposite corners lie strictly on the same side of the edge (a fold-over); touching.
+//       1 shared (a vertex): intersecting iff either triangle meets the other's opposite edge.
+//       0 shared, and every pair between objects: the exact triangle-triangle test.
+//     OracleOptions::weldByPosition makes bit-identical positions one vertex first (soups).
+//   - Degenerate triangles (a repeated index, or collinear/coincident corners, exactly) take part
+//     in no pair; they are listed in Truth::degenerate (CGAL reports them as (f, f)).
+//   - Classes (predicates.h): crossing when the two triangles are not coplanar and their
+//     relative interiors meet (one passes through the other); touching otherwise (they meet
+//     only on a boundary of one of them, or in the plane they share).
+//   - Threads: TBB (Embree's traversal and our narrow phase run inside it); limit them with
+//     tbb::global_control or a task_arena. The result does not depend on the thread count.
+//   - Errors: InputError("scene", ...) for input the oracle cannot decide on (non-finite
+//     coordinates, |coordinate| > 2^60, indices out of range); nothing else is thrown.
+#pragma once
+
+#include "cullide/cullide.h"
+#include "cullide/scene.h"
+
+#include <array>
+#include <compare>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace cullide::oracle {
+
+enum class PairClass : uint8_t {
+    Crossing,  // one triangle passes through the other (what the modified method must keep)
+    Touching,  // they meet only on a boundary, or coplanar (only the original method keeps these)
+};
+const char* toString(PairClass c);  // "crossing" | "touching"
+
+// A triangle of the scene: object index, triangle index in that object's mesh.
+using TriangleRef = PcsTriangle;
+
+struct IntersectingPair {
+    uint32_t objectA = 0, triangleA = 0, objectB = 0, triangleB = 0;  // (A) < (B)
+    PairClass cls = PairClass::Crossing;
+
+    TriangleRef a() const { return {objectA, triangleA}; }
+    TriangleRef b() const { return {objectB, triangleB}; }
+    bool selfPair() const { return objectA == objectB; }
+    friend auto operator<=>(const IntersectingPair&, const IntersectingPair&) = default;
+};
+
+struct OracleOptions {
+    // Treat vertices of one object with bit-identical world positions as one vertex for the
+    // sharing rules (for soups whose vertices are duplicated). Off: sharing is by index only,
+    // as CGAL does, and triangles that meet at duplicated vertices are touching pairs.
+    bool weldByPosition = false;
+};
+
+struct Truth {
+    std::vector<IntersectingPair> pairs;   // sorted, each unordered pair once
+    std::vector<TriangleRef> degenerate;   // sorted; in no pair
+    size_t trianglesTested = 0;            // non-degenerate triangles given to the broad phase
+    size_t candidatePairs = 0;             // broad-phase pairs given to the narrow phase
+    double setupSeconds = 0;               // validation, world positions, degeneracy, boxes
+    double buildSeconds = 0;               // Embree BVH build
+    double collideSeconds = 0;             // rtcCollide with the narrow phase inside it
+    double sortSeconds = 0;                // merging the per-thread results
+    double totalSeconds = 0;
+
+    size_t count(PairClass c) const;
+};
+
+// All intersecting pairs of `scene` (self pairs and pairs between objects).
+Truth findIntersections(const Scene& scene, const OracleOptions& options = {});
+
+// The exact stage of the pipeline (CULLIDE runs it after the GPU stage): the same narrow phase,
+// on the triangles of `pcs` only (pairs with both triangles in the PCS). Entries of `pcs` must
+// name triangles of `scene` (InputError("pcs", ...) otherwise); duplicates are ignored.
+Truth exactStage(const Scene& scene, std::span<const PcsTriangle> pcs, const OracleOptions& options = {});
+
+}  // namespace cullide::oracle

@@ -1,0 +1,35 @@
+// The oracle's broad phase: Embree 3's rtcCollide on user geometry (internal to oracle/).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace cullide::oracle::detail {
+
+// A primitive's box, already rounded outward to float.
+struct Box {
+    float lo[3], hi[3];
+};
+
+// One candidate pair: object (Embree geometry) and primitive indices of both sides. Same layout
+// as RTCCollision.
+struct Candidate {
+    uint32_t object0, prim0, object1, prim1;
+};
+
+// Receives batches of candidates, concurrently from several threads, in no fixed order.
+using CandidateFn = void (*)(void* user, const Candidate* pairs, uint32_t count);
+
+struct BroadPhaseTimes {
+    double buildSeconds = 0, collideSeconds = 0;
+};
+
+// Every pair of primitives whose boxes overlap, among all objects' boxes (object i is Embree
+// geometry i): pairs within an object and between objects. Self collision reports each
+// unordered pair in both orders and never (p, p); the callback must filter. Boxes must be
+// finite with lo <= hi and |coordinates| < 2^60 (the caller validates). Throws
+// std::runtime_error on an Embree error (a bug or out of memory).
+BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateFn fn, void* user);
+
+}  // namespace cullide::oracle::detail

@@ -1,0 +1,199 @@
+// The exact oracle (see oracle.h): Embree's broad phase, then the exact narrow phase of
+// predicates.cpp inside the collision callback, per thread, merged and sorted at the end.
+#include "cullide/oracle/oracle.h"
+
+#include "broad_phase.h"
+#include "cullide/error.h"
+#include "cullide/oracle/predicates.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace cullide::oracle {
+namespace {
+
+using detail::Box;
+using detail::Candidate;
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Coordinates beyond this are refused: Embree drops boxes beyond ~1.8e18, and the float filter's
+// products stay far from overflow.
+constexpr double kMaxCoordinate = 0x1p60;
+
+struct ObjectData {
+    std::vector<Vec3d> positions;    // world positions (float values, exactly)
+    std::vector<Triangle> triangles; // vertex indices, welded when asked
+    std::vector<uint32_t> prims;     // Embree primitive -> triangle index (ascending)
+    std::vector<Box> boxes;          // one per primitive
+};
+
+struct Local {
+    std::vector<IntersectingPair> pairs;
+    size_t candidates = 0;
+};
+
+struct Context {
+    std::vector<ObjectData> objects;
+    tbb::enumerable_thread_specific<Local> locals;
+};
+
+PairClass toClass(Contact c) { return c == Contact::Crossing ? PairClass::Crossing : PairClass::Touching; }
+
+// The narrow phase, called concurrently by Embree with batches of candidates.
+void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
+    Context& ctx = *static_cast<Context*>(user);
+    Local& local = ctx.locals.local();
+    for (uint32_t k = 0; k < count; ++k) {
+        const Candidate& c = pairs[k];
+        // Each unordered pair comes in both orders: keep (object, primitive) ascending.
+        if (c.object0 > c.object1 || (c.object0 == c.object1 && c.prim0 >= c.prim1)) continue;
+        ++local.candidates;
+        const ObjectData& oa = ctx.objects[c.object0];
+        const ObjectData& ob = ctx.objects[c.object1];
+        const uint32_t ta = oa.prims[c.prim0], tb = ob.prims[c.prim1];
+        const Triangle& ia = oa.triangles[ta];
+        const Triangle& ib = ob.triangles[tb];
+        const TrianglePoints pa{oa.positions[ia[0]], oa.positions[ia[1]], oa.positions[ia[2]]};
+        const TrianglePoints pb{ob.positions[ib[0]], ob.positions[ib[1]], ob.positions[ib[2]]};
+        const Contact contact = faceContact(pa, ia, pb, ib, c.object0 == c.object1);
+        if (contact != Contact::None) local.pairs.push_back({c.object0, ta, c.object1, tb, toClass(contact)});
+    }
+}
+
+// Bit pattern of a float position, for welding.
+std::array<uint32_t, 3> bits(const Vec3f& p) {
+    return {std::bit_cast<uint32_t>(p.x()), std::bit_cast<uint32_t>(p.y()), std::bit_cast<uint32_t>(p.z())};
+}
+
+// Vertex -> the smallest index with the same bit pattern.
+std::vector<uint32_t> weldMap(const std::vector<Vec3f>& positions) {
+    std::vector<uint32_t> order(positions.size());
+    for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+        const auto ba = bits(positions[a]), bb = bits(positions[b]);
+        return ba != bb ? ba < bb : a < b;
+    });
+    std::vector<uint32_t> map(positions.size());
+    for (size_t k = 0; k < order.size(); ++k)
+        map[order[k]] = (k > 0 && bits(positions[order[k]]) == bits(positions[order[k - 1]])) ? map[order[k - 1]] : order[k];
+    return map;
+}
+
+float roundDown(float x) { return std::nextafter(x, -std::numeric_limits<float>::infinity()); }
+float roundUp(float x) { return std::nextafter(x, std::numeric_limits<float>::infinity()); }
+
+// `subset`: per object, which triangles take part (null: all).
+Truth run(const Scene& scene, const OracleOptions& options, const std::vector<std::vector<char>>* subset) {
+    const auto t0 = Clock::now();
+    Truth truth;
+    Context ctx;
+    ctx.objects.resize(scene.objects.size());
+    std::vector<std::vector<char>> degenerate(scene.objects.size());
+    for (size_t o = 0; o < scene.objects.size(); ++o) {
+        const Mesh world = scene.worldMesh(o);
+        const std::string name = "object '" + scene.objects[o].name + "'";
+        for (size_t v = 0; v < world.positions.size(); ++v)
+            for (int k = 0; k < 3; ++k) {
+                const float x = world.positions[v][k];
+                if (!std::isfinite(x))
+                    throw InputError("scene", name + ": vertex " + std::to_string(v) + " has a non-finite world coordinate");
+                if (std::abs(double(x)) > kMaxCoordinate)
+                    throw InputError("scene", name + ": vertex " + std::to_string(v) +
+                                                  " has a world coordinate beyond 2^60, which the oracle cannot decide on");
+            }
+        for (size_t t = 0; t < world.triangles.size(); ++t)
+            for (uint32_t v : world.triangles[t])
+                if (v >= world.positions.size())
+                    throw InputError("scene", name + ": triangle " + std::to_string(t) + " has a vertex index out of range");
+
+        ObjectData& d = ctx.objects[o];
+        d.positions.resize(world.positions.size());
+        for (size_t v = 0; v < world.positions.size(); ++v) d.positions[v] = world.positions[v].cast<double>();
+        d.triangles = world.triangles;
+        if (options.weldByPosition) {
+            const std::vector<uint32_t> map = weldMap(world.positions);
+            for (Triangle& t : d.triangles)
+                for (uint32_t& v : t) v = map[v];
+        }
+        const size_t n = d.triangles.size();
+        std::vector<char>& degen = degenerate[o];
+        degen.assign(n, 0);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t t = r.begin(); t != r.end(); ++t) {
+                if (subset && !(*subset)[o][t]) continue;
+                const Triangle& tri = world.triangles[t];  // the file's indices: a repeat is degenerate
+                degen[t] = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] ||
+                           collinear(d.positions[tri[0]], d.positions[tri[1]], d.positions[tri[2]]);
+            }
+        });
+        for (size_t t = 0; t < n; ++t) {
+            if (subset && !(*subset)[o][t]) continue;
+            if (degen[t]) {
+                truth.degenerate.push_back({uint32_t(o), uint32_t(t)});
+                continue;
+            }
+            d.prims.push_back(uint32_t(t));
+            Box b;
+            const Triangle& tri = world.triangles[t];
+            for (int k = 0; k < 3; ++k) {
+                const float a = world.positions[tri[0]][k], bb = world.positions[tri[1]][k], c = world.positions[tri[2]][k];
+                // Float corners: the exact box is a float box; one ulp outward keeps boxes that
+                // only touch overlapping, whatever Embree's comparisons.
+                b.lo[k] = roundDown(std::min({a, bb, c}));
+                b.hi[k] = roundUp(std::max({a, bb, c}));
+            }
+            d.boxes.push_back(b);
+        }
+        truth.trianglesTested += d.prims.size();
+    }
+    truth.setupSeconds = since(t0);
+
+    std::vector<std::vector<Box>> boxes(ctx.objects.size());
+    for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = std::move(ctx.objects[o].boxes);
+    const detail::BroadPhaseTimes bt = detail::collideAll(boxes, narrowPhase, &ctx);
+    truth.buildSeconds = bt.buildSeconds;
+    truth.collideSeconds = bt.collideSeconds;
+
+    const auto t1 = Clock::now();
+    size_t total = 0;
+    for (const Local& l : ctx.locals) total += l.pairs.size(), truth.candidatePairs += l.candidates;
+    truth.pairs.reserve(total);
+    for (const Local& l : ctx.locals) truth.pairs.insert(truth.pairs.end(), l.pairs.begin(), l.pairs.end());
+    std::sort(truth.pairs.begin(), truth.pairs.end());
+    truth.sortSeconds = since(t1);
+    truth.totalSeconds = since(t0);
+    return truth;
+}
+
+}  // namespace
+
+const char* toString(PairClass c) { return c == PairClass::Crossing ? "crossing" : "touching"; }
+
+size_t Truth::count(PairClass c) const {
+    return size_t(std::count_if(pairs.begin(), pairs.end(), [c](const IntersectingPair& p) { return p.cls == c; }));
+}
+
+Truth findIntersections(const Scene& scene, const OracleOptions& options) { return run(scene, options, nullptr); }
+
+Truth exactStage(const Scene& scene, std::span<const PcsTriangle> pcs, const OracleOptions& options) {
+    std::vector<std::vector<char>> subset(scene.objects.size());
+    for (size_t o = 0; o < scene.objects.size(); ++o) subset[o].assign(scene.objects[o].mesh.triangleCount(), 0);
+    for (const PcsTriangle& p : pcs) {
+        if (p.object >= scene.objects.size() || p.triangle >= subset[p.object].size())
+            throw InputError("pcs", "entry (" + std::to_string(p.object) + ", " + std::to_string(p.triangle) +
+                                        ") names no triangle of the scene");
+        subset[p.object][p.triangle] = 1;
+    }
+    return run(scene, options, &subset);
+}
+
+}  // namespace cullide::oracle

@@ -1,0 +1,205 @@
+// Exact predicates and the triangle-triangle narrow phase (see predicates.h).
+//
+// References
+//   - J. R. Shewchuk, DCG 18 (1997): orient3d's static filter. With u = q - p, v = r - p,
+//     w = s - p computed in double, det = u . (v x w) evaluated in double is within
+//     (7 + 56 eps) eps * permanent of the exact determinant of the (exact) input points, where
+//     eps = 2^-53 and permanent is the same sum with absolute values; orient2d: (3 + 16 eps) eps.
+//   - P. Guigue, O. Devillers, JGT 8(1) (2003), as written in CGAL 5.5
+//     (Intersections_3/internal/Triangle_3_Triangle_3_do_intersect.h): the same case table and the
+//     same two final orientations, so that our answers are CGAL's answers.
+//
+// This file and cgal_reference.cpp are the only ones that include CGAL. It is compiled with
+// -frounding-math (CGAL's interval filters need it) and -ffp-contract=off (the error bounds
+// assume every product and sum is rounded on its own, never fused).
+#include "cullide/oracle/predicates.h"
+
+#include "cullide/error.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/intersections.h>
+
+#include <cmath>
+
+namespace cullide::oracle {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+
+Point toPoint(const Vec3d& p) { return Point(p.x(), p.y(), p.z()); }
+Kernel::Triangle_3 toTriangle(const TrianglePoints& t) {
+    return Kernel::Triangle_3(toPoint(t[0]), toPoint(t[1]), toPoint(t[2]));
+}
+
+constexpr double kEps = 0x1p-53;
+constexpr double kO3dErrBound = (7.0 + 56.0 * kEps) * kEps;
+constexpr double kO2dErrBound = (3.0 + 16.0 * kEps) * kEps;
+
+int sign(CGAL::Orientation o) { return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0; }
+
+// A 2D orientation in the projection onto axes (i, j) certainly non-zero (float filter)?
+bool orient2dCertainlyNonZero(const Vec3d& p, const Vec3d& q, const Vec3d& r, int i, int j) {
+    const double l = (q[i] - p[i]) * (r[j] - p[j]);
+    const double rr = (q[j] - p[j]) * (r[i] - p[i]);
+    const double det = l - rr;
+    return std::abs(det) > kO2dErrBound * (std::abs(l) + std::abs(rr));
+}
+
+// Guigue-Devillers' canonical order, CGAL's table: given the signs of a triangle's corners
+// (0, 1, 2) with respect to the other's plane, the corners (sMin, tMin, sMax, tMax) of the two
+// edges that bound its chord on the planes' common line. Returns false when all three signs are
+// equal and non-zero (no contact) or all are zero (coplanar: *coplanar set).
+bool canonicalOrder(int d0, int d1, int d2, int idx[4], bool* coplanar) {
+    auto set = [&](int a, int b, int c, int d) { idx[0] = a, idx[1] = b, idx[2] = c, idx[3] = d; };
+    *coplanar = false;
+    if (d0 > 0) {
+        if (d1 > 0) {
+            if (d2 > 0) return false;
+            set(1, 2, 2, 0);
+        } else if (d2 > 0) {
+            set(0, 1, 1, 2);
+        } else {
+            set(0, 1, 2, 0);
+        }
+    } else if (d0 < 0) {
+        if (d1 < 0) {
+            if (d2 < 0) return false;
+            set(2, 0, 1, 2);
+        } else if (d2 < 0) {
+            set(1, 2, 0, 1);
+        } else {
+            set(2, 0, 0, 1);
+        }
+    } else if (d1 > 0) {
+        if (d2 > 0) set(2, 0, 0, 1);
+        else set(1, 2, 0, 1);
+    } else if (d1 < 0) {
+        if (d2 < 0) set(0, 1, 2, 0);
+        else set(0, 1, 1, 2);
+    } else if (d2 > 0) {
+        set(2, 0, 1, 2);
+    } else if (d2 < 0) {
+        set(1, 2, 2, 0);
+    } else {
+        *coplanar = true;
+        return false;
+    }
+    return true;
+}
+
+bool straddles(int d0, int d1, int d2) {
+    return (d0 > 0 || d1 > 0 || d2 > 0) && (d0 < 0 || d1 < 0 || d2 < 0);
+}
+
+}  // namespace
+
+int orient3d(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s) {
+    const double ux = q.x() - p.x(), uy = q.y() - p.y(), uz = q.z() - p.z();
+    const double vx = r.x() - p.x(), vy = r.y() - p.y(), vz = r.z() - p.z();
+    const double wx = s.x() - p.x(), wy = s.y() - p.y(), wz = s.z() - p.z();
+    const double m1 = vy * wz, m2 = vz * wy, m3 = vz * wx, m4 = vx * wz, m5 = vx * wy, m6 = vy * wx;
+    const double det = ux * (m1 - m2) + uy * (m3 - m4) + uz * (m5 - m6);
+    const double permanent = (std::abs(m1) + std::abs(m2)) * std::abs(ux) + (std::abs(m3) + std::abs(m4)) * std::abs(uy) +
+                             (std::abs(m5) + std::abs(m6)) * std::abs(uz);
+    const double bound = kO3dErrBound * permanent;
+    if (det > bound) return 1;
+    if (-det > bound) return -1;
+    return sign(CGAL::orientation(toPoint(p), toPoint(q), toPoint(r), toPoint(s)));
+}
+
+bool collinear(const Vec3d& p, const Vec3d& q, const Vec3d& r) {
+    // Collinear iff all three axis-plane projections have zero orientation.
+    if (orient2dCertainlyNonZero(p, q, r, 0, 1) || orient2dCertainlyNonZero(p, q, r, 1, 2) ||
+        orient2dCertainlyNonZero(p, q, r, 2, 0))
+        return false;
+    return CGAL::collinear(toPoint(p), toPoint(q), toPoint(r));
+}
+
+Contact triangleContact(const TrianglePoints& a, const TrianglePoints& b) {
+    // Signs of a's corners with respect to b's plane, then of b's with respect to a's.
+    const int da0 = orient3d(b[0], b[1], b[2], a[0]);
+    const int da1 = orient3d(b[0], b[1], b[2], a[1]);
+    const int da2 = orient3d(b[0], b[1], b[2], a[2]);
+    int ia[4], ib[4];
+    bool coplanar = false;
+    if (!canonicalOrder(da0, da1, da2, ia, &coplanar)) {
+        if (!coplanar) return Contact::None;
+        // Coplanar: CGAL's 2D test on coplanar orientations (rare; it decides exactly too).
+        return CGAL::do_intersect(toTriangle(a), toTriangle(b)) ? Contact::Touching : Contact::None;
+    }
+    const int db0 = orient3d(a[0], a[1], a[2], b[0]);
+    const int db1 = orient3d(a[0], a[1], a[2], b[1]);
+    const int db2 = orient3d(a[0], a[1], a[2], b[2]);
+    if (!canonicalOrder(db0, db1, db2, ib, &coplanar)) {
+        // b's corners all on a's plane while a's are not all on b's: impossible for
+        // non-degenerate triangles, but answer as CGAL does.
+        if (!coplanar) return Contact::None;
+        return CGAL::do_intersect(toTriangle(a), toTriangle(b)) ? Contact::Touching : Contact::None;
+    }
+    // The chords [i, j] of a and [k, l] of b on the common line overlap iff k <= j and i <= l;
+    // each comparison is the sign of one orientation (zero: the two ends coincide).
+    const int lo = orient3d(a[ia[0]], a[ia[1]], b[ib[0]], b[ib[1]]);
+    const int hi = orient3d(a[ia[2]], a[ia[3]], b[ib[3]], b[ib[2]]);
+    if (lo > 0 || hi > 0) return Contact::None;
+    // Crossing: both straddle the other's plane and the overlap has positive length, i.e. both
+    // comparisons are strict; then the overlap's inner points are interior to both triangles.
+    if (lo < 0 && hi < 0 && straddles(da0, da1, da2) && straddles(db0, db1, db2)) return Contact::Crossing;
+    return Contact::Touching;
+}
+
+bool triangleSegmentIntersect(const TrianglePoints& t, const Vec3d& s0, const Vec3d& s1) {
+    const int d0 = orient3d(t[0], t[1], t[2], s0);
+    const int d1 = orient3d(t[0], t[1], t[2], s1);
+    if (d0 == d1 && d0 != 0) return false;  // both strictly on one side
+    if (d0 == 0 && d1 == 0)                 // in the triangle's plane: CGAL's coplanar test
+        return CGAL::do_intersect(toTriangle(t), Kernel::Segment_3(toPoint(s0), toPoint(s1)));
+    // The segment meets the plane in one point; it lies in the closed triangle iff the line
+    // s0 s1 passes on the same (closed) side of the three edges.
+    const int e0 = orient3d(s0, s1, t[0], t[1]);
+    const int e1 = orient3d(s0, s1, t[1], t[2]);
+    const int e2 = orient3d(s0, s1, t[2], t[0]);
+    return (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
+}
+
+Contact faceContact(const TrianglePoints& a, const Triangle& ia, const TrianglePoints& b, const Triangle& ib,
+                    bool sameMesh) {
+    if (sameMesh) {
+        int shared = 0, sa[3] = {0, 0, 0}, sb[3] = {0, 0, 0};  // positions of shared indices
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                if (ia[i] == ib[j]) {
+                    sa[shared] = i;
+                    sb[shared] = j;
+                    ++shared;
+                    break;
+                }
+        if (shared == 3) return Contact::Touching;  // a duplicated face lies on itself
+        if (shared == 2) {
+            // Shared edge (CGAL's rule): a fold-over iff the four corners are coplanar and the
+            // two opposite corners are strictly on the same side of the edge.
+            const Vec3d& e0 = a[sa[0]];
+            const Vec3d& e1 = a[sa[1]];
+            const Vec3d& ra = a[3 - sa[0] - sa[1]];
+            const Vec3d& rb = b[3 - sb[0] - sb[1]];
+            if (orient3d(a[0], a[1], a[2], rb) != 0) return Contact::None;
+            return CGAL::coplanar_orientation(toPoint(e0), toPoint(e1), toPoint(ra), toPoint(rb)) == CGAL::POSITIVE
+                       ? Contact::Touching
+                       : Contact::None;
+        }
+        if (shared == 1) {
+            // Shared vertex (CGAL's rule): they meet elsewhere iff one meets the other's
+            // opposite edge.
+            const int i = sa[0], j = sb[0];
+            if (!triangleSegmentIntersect(a, b[(j + 1) % 3], b[(j + 2) % 3]) &&
+                !triangleSegmentIntersect(b, a[(i + 1) % 3], a[(i + 2) % 3]))
+                return Contact::None;
+            const Contact c = triangleContact(a, b);
+            CULLIDE_CHECK(c != Contact::None, "faceContact: triangles sharing a vertex must meet");
+            return c;
+        }
+    }
+    return triangleContact(a, b);
+}
+
+}  // namespace cullide::oracle

@@ -1,0 +1,280 @@
+// Tests for oracle/src/oracle.cpp (and the sharing rules of predicates.cpp, end to end): hand-built
+// traps, the broad phase against all pairs, determinism across thread counts, the exact stage,
+// bad input, and the cross-check with CGAL's self_intersections pair for pair.
+#include "cullide/oracle/oracle.h"
+
+#include "cullide/error.h"
+#include "cullide/generators.h"
+#include "cullide/mesh_io.h"
+#include "cullide/oracle/cgal_reference.h"
+#include "cullide/oracle/predicates.h"
+
+#include <gtest/gtest.h>
+
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace cullide::oracle {
+namespace {
+
+Scene sceneOf(std::vector<Mesh> meshes) {
+    Scene s;
+    for (size_t i = 0; i < meshes.size(); ++i) s.objects.push_back({"m" + std::to_string(i), std::move(meshes[i]), Transform::Identity()});
+    return s;
+}
+
+Mesh meshOf(std::vector<Vec3f> p, std::vector<Triangle> t) { return Mesh{std::move(p), std::move(t)}; }
+
+// The pairs of a one-object scene as (a, b, class).
+std::vector<std::tuple<uint32_t, uint32_t, PairClass>> pairsOf(const Mesh& m, const OracleOptions& o = {}) {
+    std::vector<std::tuple<uint32_t, uint32_t, PairClass>> out;
+    for (const IntersectingPair& p : findIntersections(sceneOf({m}), o).pairs) out.emplace_back(p.triangleA, p.triangleB, p.cls);
+    return out;
+}
+
+using Pairs = std::vector<std::tuple<uint32_t, uint32_t, PairClass>>;
+constexpr PairClass X = PairClass::Crossing, T = PairClass::Touching;
+
+// Trap: coplanar overlap counted as a crossing (equal depths: only the original method sees it),
+// or missed because the projection plane was chosen by a float normal.
+TEST(Oracle, CoplanarOverlappingIsTouching) {
+    const Mesh m = meshOf({{0, 0, 0.25f}, {2, 0, 0.5f}, {0, 2, 0.75f}, {0.5f, 0.5f, 0.4375f}, {3, 0.5f, 0.75f}, {0.5f, 3, 1.0625f}},
+                          {{0, 1, 2}, {3, 4, 5}});
+    // Both on the tilted plane z = 0.25 + 0.125 x + 0.25 y (exact in float at these points).
+    EXPECT_EQ(pairsOf(m), (Pairs{{0, 1, T}}));
+}
+
+// Trap: coplanar triangles that meet only at one boundary point (corner on edge), and coplanar
+// triangles one float ulp apart.
+TEST(Oracle, CoplanarTouchingAndCoplanarApart) {
+    const float gap = std::nextafter(1.0f, 2.0f);
+    const Mesh touch = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {1, 1, 0}, {3, 1, 0}, {1, 3, 0}}, {{0, 1, 2}, {3, 4, 5}});
+    EXPECT_EQ(pairsOf(touch), (Pairs{{0, 1, T}}));
+    const Mesh apart = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {gap, gap, 0}, {3, 1, 0}, {1, 3, 0}}, {{0, 1, 2}, {3, 4, 5}});
+    EXPECT_TRUE(pairsOf(apart).empty());
+}
+
+// Trap: shared-edge neighbours reported because they touch along the edge; a fold-over (coplanar,
+// opposite corners on the same side) missed because they share an edge.
+TEST(Oracle, SharedEdgeOnlyFoldOverCounts) {
+    const Mesh flat = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}, {{0, 1, 2}, {2, 1, 3}});
+    EXPECT_TRUE(pairsOf(flat).empty());
+    const Mesh bent = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 1}}, {{0, 1, 2}, {2, 1, 3}});
+    EXPECT_TRUE(pairsOf(bent).empty());
+    const Mesh fold = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.25f, 0.25f, 0}}, {{0, 1, 2}, {1, 0, 3}});
+    EXPECT_EQ(pairsOf(fold), (Pairs{{0, 1, T}}));
+    // Folded flat onto the edge's line side, but the corner exactly on the edge line: no overlap.
+    const Mesh onLine = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5f, 1, 0}}, {{0, 1, 2}, {2, 1, 3}});
+    EXPECT_TRUE(pairsOf(onLine).empty());
+}
+
+// Trap: a shared vertex taken for a contact (fan neighbours), and a crossing through a shared
+// vertex missed because pairs with a shared vertex are skipped (Embree's tutorial does that).
+TEST(Oracle, SharedVertexTouchVersusCrossing) {
+    const Mesh fan = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0.5f}, {0, -1, 0.5f}}, {{0, 1, 2}, {0, 3, 4}});
+    EXPECT_TRUE(pairsOf(fan).empty());
+    // The second triangle's opposite edge pierces the first's interior: a crossing.
+    const Mesh pierce = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, -1}, {0.5f, 0.5f, 1}},
+                               {{0, 1, 2}, {0, 3, 4}});
+    EXPECT_EQ(pairsOf(pierce), (Pairs{{0, 1, X}}));
+    // The opposite edge passes through the first triangle's edge and the second triangle cuts
+    // through the first along a segment from the shared vertex: still a crossing.
+    const Mesh cut = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {1, 1, -1}, {1, 1, 1}}, {{0, 1, 2}, {0, 3, 4}});
+    EXPECT_EQ(pairsOf(cut), (Pairs{{0, 1, X}}));
+    // Standing on the first triangle (an edge lying in it, the rest above): touching.
+    const Mesh stand = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {1, 1, 0}, {1, 1, 1}}, {{0, 1, 2}, {0, 3, 4}});
+    EXPECT_EQ(pairsOf(stand), (Pairs{{0, 1, T}}));
+}
+
+// Trap: a T-junction (a corner inside another triangle's edge, no shared index) and a corner
+// exactly on a face are contacts, not crossings; one float ulp away they are nothing.
+TEST(Oracle, TJunctionAndVertexOnFace) {
+    const Mesh tj = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {1, 0, 0}, {1, -1, 0}, {1, 0, 1}}, {{0, 1, 2}, {3, 4, 5}});
+    EXPECT_EQ(pairsOf(tj), (Pairs{{0, 1, T}}));
+    const Mesh onFace = meshOf({{0, 0, 0}, {3, 0, 1}, {0, 3, 1}, {1, 1, 2.0f / 3.0f}, {1, 1, 5}, {2, 1, 5}},
+                               {{0, 1, 2}, {3, 4, 5}});
+    // (1, 1, 2/3) in float is not exactly on z = (x + y) / 3: a float test would call it on the face.
+    const Mesh onFaceExact = meshOf({{0, 0, 0}, {4, 0, 1}, {0, 4, 1}, {1, 1, 0.5f}, {1, 1, 5}, {2, 1, 5}},
+                                    {{0, 1, 2}, {3, 4, 5}});
+    EXPECT_EQ(pairsOf(onFaceExact), (Pairs{{0, 1, T}}));
+    const float above = std::nextafter(0.5f, 1.0f);
+    const Mesh justAbove = meshOf({{0, 0, 0}, {4, 0, 1}, {0, 4, 1}, {1, 1, above}, {1, 1, 5}, {2, 1, 5}},
+                                  {{0, 1, 2}, {3, 4, 5}});
+    EXPECT_TRUE(pairsOf(justAbove).empty());
+    // 2/3 rounded to float lies above or below the plane, never on it: crossing or nothing, not touching.
+    for (const auto& [a, b, c] : pairsOf(onFace)) EXPECT_NE(c, T);
+}
+
+// Trap: degenerate (collinear, coincident, repeated-index) triangles paired with what they pass
+// through; CGAL reports them as (f, f) and in no pair, and so do we.
+TEST(Oracle, DegenerateTrianglesAreListedNotPaired) {
+    const Mesh m = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, -1}, {0.5f, 0.5f, 0}, {0.5f, 0.5f, 1}},
+                          {{0, 1, 2}, {3, 4, 5}, {3, 3, 5}, {3, 5, 5}});
+    const Truth t = findIntersections(sceneOf({m}));
+    EXPECT_TRUE(t.pairs.empty());
+    EXPECT_EQ(t.degenerate, (std::vector<TriangleRef>{{0, 1}, {0, 2}, {0, 3}}));
+    EXPECT_EQ(t.trianglesTested, 1u);
+}
+
+// Trap: duplicated faces (same three indices, either orientation) silently skipped as "sharing
+// everything"; duplicated vertices in a soup.
+TEST(Oracle, DuplicatedFacesAndDuplicatedVertices) {
+    const Mesh dup = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {2, 1, 0}});
+    EXPECT_EQ(pairsOf(dup), (Pairs{{0, 1, T}}));
+    // Two flat neighbours whose shared edge uses duplicated vertices (3 = 1, 4 = 2 bit for bit):
+    // by index they share nothing and touch along the edge; welded they are neighbours.
+    const Mesh soup = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}, {{0, 1, 2}, {4, 3, 5}});
+    EXPECT_EQ(pairsOf(soup), (Pairs{{0, 1, T}}));
+    OracleOptions weld;
+    weld.weldByPosition = true;
+    EXPECT_TRUE(pairsOf(soup, weld).empty());
+    // Welding is by world position: (1, 0, 0) and (1, 0, 0) weld, (0, 1, 0.5) stays apart, so
+    // the triangles share one vertex and meet nowhere else.
+    const Mesh partly = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0.5f}, {1, 1, 0}}, {{0, 1, 2}, {4, 3, 5}});
+    EXPECT_TRUE(pairsOf(partly, weld).empty());
+}
+
+// Trap: float tests lie at tiny and huge magnitudes and for near-parallel planes. The same
+// crossing configuration scaled by 2^-100 and 2^55 (exact in float) keeps its answer; a triangle
+// one denormal above a plane does not touch it; a nearly parallel triangle that dips one ulp
+// below crosses.
+TEST(Oracle, TinyHugeAndNearParallel) {
+    for (float scale : {0x1p-100f, 1.0f, 0x1p55f}) {
+        const Mesh m = meshOf({{0, 0, 0}, {2 * scale, 0, 0}, {0, 2 * scale, 0}, {0.5f * scale, 0.5f * scale, -scale},
+                               {0.5f * scale, 0.5f * scale, scale}, {3 * scale, 3 * scale, scale}},
+                              {{0, 1, 2}, {3, 4, 5}});
+        EXPECT_EQ(pairsOf(m), (Pairs{{0, 1, X}})) << "scale " << scale;
+    }
+    const float tiny = std::numeric_limits<float>::denorm_min();
+    const Mesh above = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, tiny}, {1.5f, 0.2f, tiny}, {0.2f, 1.5f, tiny}},
+                              {{0, 1, 2}, {3, 4, 5}});
+    EXPECT_TRUE(pairsOf(above).empty());
+    const Mesh dips = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, -tiny}, {1.5f, 0.2f, tiny}, {0.2f, 1.5f, tiny}},
+                             {{0, 1, 2}, {3, 4, 5}});
+    EXPECT_EQ(pairsOf(dips), (Pairs{{0, 1, X}}));
+}
+
+// Between objects every contact counts, whatever the indices say (different vertex arrays).
+TEST(Oracle, BetweenObjectsIndicesDoNotShare) {
+    const Mesh a = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}});
+    const Mesh b = meshOf({{0, 0, 0}, {1, 0, 0}, {0, -1, 0}}, {{0, 1, 2}});  // same indices, shared edge geometrically
+    const Truth t = findIntersections(sceneOf({a, b}));
+    ASSERT_EQ(t.pairs.size(), 1u);
+    EXPECT_EQ(t.pairs[0], (IntersectingPair{0, 0, 1, 0, T}));
+}
+
+// Random triangles in three objects: the Embree broad phase (with its float boxes) loses no pair
+// that the all-pairs loop finds, and invents none.
+TEST(Oracle, BroadPhaseMatchesAllPairs) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0, 1);
+    std::vector<Mesh> meshes(3);
+    for (Mesh& m : meshes)
+        for (int t = 0; t < 150; ++t) {
+            const Vec3f c(u(rng), u(rng), u(rng));
+            const uint32_t base = uint32_t(m.positions.size());
+            for (int k = 0; k < 3; ++k) m.positions.push_back(c + 0.15f * Vec3f(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
+            // Every third triangle reuses a corner of the previous one: shared-vertex rules too.
+            if (t % 3 == 2) m.triangles.push_back({base - 1, base + 1, base + 2});
+            else m.triangles.push_back({base, base + 1, base + 2});
+        }
+    const Scene scene = sceneOf(meshes);
+    std::vector<IntersectingPair> expected;
+    auto pts = [&](uint32_t o, uint32_t t) {
+        const Triangle& i = meshes[o].triangles[t];
+        return TrianglePoints{meshes[o].positions[i[0]].cast<double>(), meshes[o].positions[i[1]].cast<double>(),
+                              meshes[o].positions[i[2]].cast<double>()};
+    };
+    for (uint32_t oa = 0; oa < 3; ++oa)
+        for (uint32_t ta = 0; ta < 150; ++ta)
+            for (uint32_t ob = oa; ob < 3; ++ob)
+                for (uint32_t tb = ob == oa ? ta + 1 : 0; tb < 150; ++tb) {
+                    const Contact c = faceContact(pts(oa, ta), meshes[oa].triangles[ta], pts(ob, tb), meshes[ob].triangles[tb], oa == ob);
+                    if (c != Contact::None)
+                        expected.push_back({oa, ta, ob, tb, c == Contact::Crossing ? X : T});
+                }
+    const Truth t = findIntersections(scene);
+    EXPECT_GT(expected.size(), 100u);
+    EXPECT_EQ(t.pairs, expected);
+}
+
+// Bad input is refused before it reaches Embree (which would drop it silently).
+TEST(Oracle, RefusesNonFiniteAndHugeCoordinates) {
+    Mesh m = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}});
+    m.positions[1].x() = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_THROW(findIntersections(sceneOf({m})), InputError);
+    m.positions[1].x() = 0x1p61f;
+    EXPECT_THROW(findIntersections(sceneOf({m})), InputError);
+    m.positions[1].x() = 1;
+    m.triangles[0][2] = 7;
+    EXPECT_THROW(findIntersections(sceneOf({m})), InputError);
+    EXPECT_THROW(exactStage(sceneOf({meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}})}), std::vector<PcsTriangle>{{0, 1}}),
+                 InputError);
+}
+
+Mesh bundled(const char* name) { return loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/" + name); }
+
+// The callback runs concurrently in no fixed order: the result must not depend on the threads.
+TEST(Oracle, DeterministicForOneAndTwoThreads) {
+    SceneRequest req;
+    req.triangles = 20000;
+    const Scene scene = makeTwoCows(bundled("cow.off"), req).scene;
+    std::vector<IntersectingPair> results[2];
+    for (int threads : {1, 2}) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        results[threads - 1] = findIntersections(scene).pairs;
+    }
+    EXPECT_GT(results[0].size(), 100u);
+    EXPECT_EQ(results[0], results[1]);
+    EXPECT_TRUE(std::is_sorted(results[0].begin(), results[0].end()));
+}
+
+// The exact stage on a PCS: with every triangle it is the truth; on a subset, exactly the
+// truth's pairs whose two triangles are in the subset.
+TEST(Oracle, ExactStageIsTheTruthRestrictedToThePcs) {
+    SceneRequest req;
+    req.triangles = 6000;
+    const Scene scene = makeTwoCows(bundled("cow.off"), req).scene;
+    const Truth truth = findIntersections(scene);
+    std::vector<PcsTriangle> all, half;
+    for (uint32_t t = 0; t < scene.objects[0].mesh.triangleCount(); ++t) {
+        all.push_back({0, t});
+        if (t % 2) half.push_back({0, t});
+    }
+    EXPECT_EQ(exactStage(scene, all).pairs, truth.pairs);
+    std::vector<IntersectingPair> expected;
+    for (const IntersectingPair& p : truth.pairs)
+        if (p.triangleA % 2 && p.triangleB % 2) expected.push_back(p);
+    EXPECT_EQ(exactStage(scene, half).pairs, expected);
+}
+
+// Pair for pair against CGAL's self_intersections.
+void expectSameAsCgal(const Mesh& mesh, const std::string& what, size_t expectedCount = 0) {
+    const Truth truth = findIntersections(sceneOf({mesh}));
+    const std::vector<FacePair> ours = selfPairsOf(truth, 0);
+    const std::vector<FacePair> cgal = CgalSelfIntersections(mesh, what).run();
+    EXPECT_EQ(ours, cgal) << what;
+    if (expectedCount) {
+        EXPECT_EQ(cgal.size(), expectedCount) << what;
+    }
+}
+
+// The bundled cow self-intersects: CGAL finds 101 pairs.
+TEST(OracleCgal, CowSameAsCgal) { expectSameAsCgal(bundled("cow.off"), "cow", 101); }
+TEST(OracleCgal, BunnySameAsCgal) { expectSameAsCgal(bundled("bunny.off"), "bunny"); }
+
+// The paper's generated scenes at a few thousand triangles (the deformation makes the crossings).
+TEST(OracleCgal, GeneratedScenesSameAsCgal) {
+    SceneRequest req;
+    req.triangles = 4000;
+    const Mesh bunny = makeDeformedBunny(bundled("bunny.off"), req).scene.objects[0].mesh;
+    expectSameAsCgal(bunny, "deformed bunny");
+    const Mesh cows = makeTwoCows(bundled("cow.off"), req).scene.objects[0].mesh;
+    expectSameAsCgal(cows, "two cows");
+}
+
+}  // namespace
+}  // namespace cullide::oracle
