@@ -1,0 +1,204 @@
+// Tests of the validation machinery (cullide/raster/validate.h) and of `cullide validate`: the
+// interval evaluator's exact track reproduces the CPU reference, its intervals contain the
+// reference's counts, and on llvmpipe no query of the bundled scenes falls outside its interval.
+#include "cullide/cullide.h"
+#include "cullide/error.h"
+#include "cullide/raster/cpu_backend.h"
+#include "cullide/raster/gl_backend.h"
+#include "cullide/raster/validate.h"
+#include "cullide/scene_io.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+
+namespace cullide {
+namespace {
+
+using raster::QueryInterval;
+
+// A random soup inside the unit cube and a list of Cullide-like passes: draws under LESS with
+// writes, then GREATER / GEQUAL / EQUAL queries with writes off, over every depth function.
+struct Soup {
+    std::vector<Vec3f> p;
+    std::vector<Triangle> t;
+};
+
+Soup randomSoup(uint32_t seed, uint32_t n, float size) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f), d(-size, size);
+    Soup s;
+    for (uint32_t i = 0; i < n; ++i) {
+        const Vec3f a(u(rng), u(rng), u(rng));
+        s.p.insert(s.p.end(), {a, a + Vec3f(d(rng), d(rng), d(rng)), a + Vec3f(d(rng), d(rng), d(rng))});
+        s.t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
+    }
+    return s;
+}
+
+CommandList cullideLikeList(uint32_t triangles, uint32_t group) {
+    CommandList list;
+    list.clear(1.0);
+    for (int pass = 0; pass < 2; ++pass) {
+        for (uint32_t first = 0; first < triangles; first += group) {
+            const uint32_t count = std::min(group, triangles - first);
+            list.depthMask(false);
+            list.depthFunc(pass == 0 ? DepthFunc::GEqual : DepthFunc::Greater);
+            list.beginQuery(first % (3 * group) == 0 ? QueryKind::AnySamplesPassed : QueryKind::SamplesPassed);
+            list.draw(first, count);
+            list.endQuery();
+            list.depthMask(true);
+            list.depthFunc(DepthFunc(first / group % 8));
+            list.draw(first, count);
+        }
+        list.clear(pass == 0 ? 0.0 : 1.0);
+    }
+    return list;
+}
+
+OrthoView fitted(const Soup& s, const Vec3d& dir, int size, const DepthFormat& f) {
+    const TriangleRange all{0, uint32_t(s.t.size())};
+    return fitView(s.p, s.t, std::span(&all, 1), dir, size, size, f);
+}
+
+// Trap: the interval code's re-derivation of the reference's rules drifting from the CPU
+// backend (snapping, fill rule, depth plane association, unorm rounding, the depth functions), or
+// an interval that does not contain the reference's own count. Needs no GL.
+TEST(QueryIntervals, ExactTrackReproducesTheCpuReferenceAndIntervalsContainIt) {
+    for (const DepthFormat& f : {DepthFormat::unorm(16), DepthFormat::unorm(24), DepthFormat::float32()}) {
+        const Soup s = randomSoup(7, 400, 0.15f);
+        std::unique_ptr<raster::CpuBackend> cpu = raster::makeCpuBackend();
+        raster::QueryIntervals iv;
+        cpu->setGeometry(s.p, s.t);
+        iv.setGeometry(s.p, s.t);
+        for (const Vec3d& dir : {Vec3d(0, 0, 1), Vec3d(1, -2, 0.5)}) {
+            const OrthoView view = fitted(s, dir, 96, f);
+            cpu->setView(view);
+            iv.setView(view);
+            const CommandList list = cullideLikeList(uint32_t(s.t.size()), 10);
+            const std::vector<uint64_t> ref = cpu->execute(list);
+            std::vector<uint64_t> exact;
+            bool valid = false;
+            const std::vector<QueryInterval> in = iv.execute(list, &exact, &valid);
+            ASSERT_TRUE(valid);
+            EXPECT_EQ(exact, ref) << f.name();
+            uint64_t ambiguous = 0;
+            for (size_t q = 0; q < ref.size(); ++q) {
+                EXPECT_TRUE(in[q].contains(ref[q])) << f.name() << " query " << q << ": " << ref[q] << " not in ["
+                                                    << in[q].certain << ", " << in[q].possible << "]";
+                ambiguous += in[q].possible - in[q].certain;
+            }
+            EXPECT_GT(ambiguous, 0u);  // sanity: random soups do have edges near centres
+        }
+    }
+}
+
+// Trap: intervals too loose to mean anything: for pixel-aligned, depth-separated boxes nothing
+// is ambiguous, so the interval is the exact count.
+TEST(QueryIntervals, PixelAlignedSeparatedBoxesHaveNoAmbiguity) {
+    std::vector<Vec3f> p = {{2, 2, 0.25f}, {10, 2, 0.25f}, {10, 9, 0.25f}, {2, 9, 0.25f},
+                            {5, 0, 0.75f}, {16, 0, 0.75f}, {16, 16, 0.75f}, {5, 16, 0.75f}};
+    std::vector<Triangle> t = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+    OrthoView v;
+    v.xmin = 0, v.xmax = 16, v.ymin = 0, v.ymax = 16, v.znear = 0, v.zfar = 1, v.width = 16, v.height = 16;
+    raster::QueryIntervals iv;
+    iv.setGeometry(p, t);
+    iv.setView(v);
+    CommandList list;
+    list.clear();
+    list.draw(0, 2);
+    list.beginQuery();
+    list.draw(2, 2);
+    list.endQuery();
+    const std::vector<QueryInterval> r = iv.execute(list);
+    EXPECT_EQ(r[0].certain, r[0].possible);
+    EXPECT_EQ(r[0].certain, uint64_t(11 * 16 - 5 * 7));
+}
+
+bool glMissing(std::string& why) { return !raster::glBackendAvailable(&why); }
+
+#define GL_OR_SKIP()                                                                  \
+    do {                                                                              \
+        std::string why;                                                              \
+        if (glMissing(why)) {                                                         \
+            if (std::getenv("CULLIDE_REQUIRE_GL")) FAIL() << "no GL: " << why;       \
+            GTEST_SKIP() << "no GL context: " << why;                                \
+        }                                                                             \
+    } while (0)
+
+// Trap: GL results outside the intervals on random soups (slivers, steep triangles, every depth
+// function, writes under uncertainty), at every format.
+TEST(Validate, RandomSoupsOnGlStayInsideTheirIntervals) {
+    GL_OR_SKIP();
+    std::unique_ptr<raster::GlBackend> gl = raster::makeGlBackend();
+    for (const DepthFormat& f : {DepthFormat::unorm(16), DepthFormat::unorm(24), DepthFormat::float32()}) {
+        const Soup s = randomSoup(11, 300, 0.2f);
+        std::unique_ptr<raster::CpuBackend> cpu = raster::makeCpuBackend();
+        raster::TeeBackend tee(*cpu, *gl, {});
+        tee.setGeometry(s.p, s.t);
+        tee.setView(fitted(s, Vec3d(0.3, 1, -0.2), 128, f));
+        tee.execute(cullideLikeList(uint32_t(s.t.size()), 8));
+        size_t exact = 0;
+        for (const raster::QueryComparison& c : tee.comparisons()) {
+            EXPECT_TRUE(c.inInterval()) << f.name() << " query " << c.query << ": gl " << c.other << ", reference "
+                                        << c.reference << ", interval [" << c.interval.certain << ", "
+                                        << c.interval.possible << "]";
+            exact += c.exact() ? 1 : 0;
+        }
+        std::printf("  [gl] %s: %zu of %zu queries exact\n", f.name().c_str(), exact, tee.comparisons().size());
+        EXPECT_EQ(tee.selfCheckMismatches(), 0u);
+    }
+}
+
+// Trap: the bundled scenes (the paper's bunny-through-cow) producing a GL query outside its
+// interval, i.e. a real disagreement between llvmpipe and the reference. One frame of each scene,
+// at a resolution that keeps llvmpipe's runtime small; `cullide validate` runs them in full.
+TEST(Validate, BundledScenesHaveNoQueryOutsideItsInterval) {
+    GL_OR_SKIP();
+    std::unique_ptr<raster::GlBackend> gl = raster::makeGlBackend();
+    for (const char* name : {"bunny_through_cow.json", "two_cows_and_bunny.json"}) {
+        const Animation a = loadScene(std::string(CULLIDE_DATA_DIR) + "/scenes/" + name);
+        const size_t frame = a.frameCount() / 2;
+        CullideOptions o;
+        o.width = o.height = 256;
+        std::unique_ptr<raster::CpuBackend> cpu = raster::makeCpuBackend();
+        raster::TeeBackend tee(*cpu, *gl, {});
+        tee.setFrame(uint32_t(frame));
+        runCullide(a.sceneAt(frame), tee, o);
+        size_t exact = 0, inside = 0;
+        for (const raster::QueryComparison& c : tee.comparisons()) {
+            exact += c.exact() ? 1 : 0;
+            inside += c.inInterval() ? 1 : 0;
+            EXPECT_TRUE(c.inInterval()) << name << " list " << c.list << " query " << c.query << ": gl " << c.other
+                                        << ", reference " << c.reference << ", interval [" << c.interval.certain << ", "
+                                        << c.interval.possible << "]";
+        }
+        EXPECT_EQ(tee.selfCheckMismatches(), 0u);
+        std::printf("  [gl] %s frame %zu: %zu queries, %zu exact, %zu in interval\n", name, frame,
+                    tee.comparisons().size(), exact, inside);
+    }
+}
+
+// Trap: the command exiting 0 when it should report, or not listing what it compared.
+TEST(Validate, CommandReportsRatesAndExitsZeroWhenEverythingIsInside) {
+    GL_OR_SKIP();
+    const std::string cmd = std::string("'") + CULLIDE_CLI_PATH + "' validate '" + CULLIDE_DATA_DIR +
+                            "/scenes/bunny_through_cow.json' --frame 0 --resolution 128 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    std::string out;
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) out.append(buf.data(), n);
+    const int status = pclose(p);
+    EXPECT_EQ(WEXITSTATUS(status), 0) << out;
+    EXPECT_NE(out.find("in interval"), std::string::npos) << out;
+    EXPECT_NE(out.find("outside 0"), std::string::npos) << out;
+    EXPECT_NE(out.find("PCS reference"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace cullide
