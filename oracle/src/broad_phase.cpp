@@ -62,8 +62,9 @@ BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateF
     if (!device) throw std::runtime_error("embree: cannot create a device");
     std::unique_ptr<RTCSceneTy, SceneDeleter> scene(rtcNewScene(device.get()));
     check(device.get(), "rtcNewScene");
-    // Self collision is a static query on a static scene: a high-quality build pays for itself.
-    rtcSetSceneBuildQuality(scene.get(), RTC_BUILD_QUALITY_HIGH);
+    // Medium (binned SAH): the same candidates as HIGH, built faster; LOW (Morton) builds faster
+    // still but doubles the candidates on bunny75k.
+    rtcSetSceneBuildQuality(scene.get(), RTC_BUILD_QUALITY_MEDIUM);
     size_t prims = 0;
     for (size_t i = 0; i < objects.size(); ++i) {
         RTCGeometry g = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_USER);

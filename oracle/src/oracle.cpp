@@ -29,12 +29,23 @@ double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock:
 // products stay far from overflow.
 constexpr double kMaxCoordinate = 0x1p60;
 
-struct ObjectData {
-    std::vector<Vec3d> positions;    // world positions (float values, exactly)
-    std::vector<Triangle> triangles; // vertex indices, welded when asked
-    std::vector<uint32_t> prims;     // Embree primitive -> triangle index (ascending)
-    std::vector<Box> boxes;          // one per primitive
+// What the narrow phase reads of one primitive, packed in one cache line: corners (world,
+// float) and vertex indices (welded when asked).
+struct alignas(64) Prim {
+    float p[3][3];
+    Triangle v;
+    uint32_t triangle;  // index in the object's mesh
 };
+
+struct ObjectData {
+    std::vector<Prim> prims;  // Embree primitive order = ascending triangle index
+    std::vector<Box> boxes;   // one per primitive
+};
+
+TrianglePoints corners(const Prim& p) {
+    return {Vec3d(p.p[0][0], p.p[0][1], p.p[0][2]), Vec3d(p.p[1][0], p.p[1][1], p.p[1][2]),
+            Vec3d(p.p[2][0], p.p[2][1], p.p[2][2])};
+}
 
 struct Local {
     std::vector<IntersectingPair> pairs;
@@ -57,15 +68,10 @@ void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
         // Each unordered pair comes in both orders: keep (object, primitive) ascending.
         if (c.object0 > c.object1 || (c.object0 == c.object1 && c.prim0 >= c.prim1)) continue;
         ++local.candidates;
-        const ObjectData& oa = ctx.objects[c.object0];
-        const ObjectData& ob = ctx.objects[c.object1];
-        const uint32_t ta = oa.prims[c.prim0], tb = ob.prims[c.prim1];
-        const Triangle& ia = oa.triangles[ta];
-        const Triangle& ib = ob.triangles[tb];
-        const TrianglePoints pa{oa.positions[ia[0]], oa.positions[ia[1]], oa.positions[ia[2]]};
-        const TrianglePoints pb{ob.positions[ib[0]], ob.positions[ib[1]], ob.positions[ib[2]]};
-        const Contact contact = faceContact(pa, ia, pb, ib, c.object0 == c.object1);
-        if (contact != Contact::None) local.pairs.push_back({c.object0, ta, c.object1, tb, toClass(contact)});
+        const Prim& a = ctx.objects[c.object0].prims[c.prim0];
+        const Prim& b = ctx.objects[c.object1].prims[c.prim1];
+        const Contact contact = faceContact(corners(a), a.v, corners(b), b.v, c.object0 == c.object1);
+        if (contact != Contact::None) local.pairs.push_back({c.object0, a.triangle, c.object1, b.triangle, toClass(contact)});
     }
 }
 
@@ -116,15 +122,9 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                     throw InputError("scene", name + ": triangle " + std::to_string(t) + " has a vertex index out of range");
 
         ObjectData& d = ctx.objects[o];
-        d.positions.resize(world.positions.size());
-        for (size_t v = 0; v < world.positions.size(); ++v) d.positions[v] = world.positions[v].cast<double>();
-        d.triangles = world.triangles;
-        if (options.weldByPosition) {
-            const std::vector<uint32_t> map = weldMap(world.positions);
-            for (Triangle& t : d.triangles)
-                for (uint32_t& v : t) v = map[v];
-        }
-        const size_t n = d.triangles.size();
+        std::vector<uint32_t> vertexId;  // the vertex each index stands for in the sharing rules
+        if (options.weldByPosition) vertexId = weldMap(world.positions);
+        const size_t n = world.triangles.size();
         std::vector<char>& degen = degenerate[o];
         degen.assign(n, 0);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
@@ -132,7 +132,8 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                 if (subset && !(*subset)[o][t]) continue;
                 const Triangle& tri = world.triangles[t];  // the file's indices: a repeat is degenerate
                 degen[t] = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] ||
-                           collinear(d.positions[tri[0]], d.positions[tri[1]], d.positions[tri[2]]);
+                           collinear(world.positions[tri[0]].cast<double>(), world.positions[tri[1]].cast<double>(),
+                                     world.positions[tri[2]].cast<double>());
             }
         });
         for (size_t t = 0; t < n; ++t) {
@@ -141,9 +142,15 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                 truth.degenerate.push_back({uint32_t(o), uint32_t(t)});
                 continue;
             }
-            d.prims.push_back(uint32_t(t));
-            Box b;
             const Triangle& tri = world.triangles[t];
+            Prim prim;
+            for (int k = 0; k < 3; ++k) {
+                for (int c = 0; c < 3; ++c) prim.p[k][c] = world.positions[tri[k]][c];
+                prim.v[k] = vertexId.empty() ? tri[k] : vertexId[tri[k]];
+            }
+            prim.triangle = uint32_t(t);
+            d.prims.push_back(prim);
+            Box b;
             for (int k = 0; k < 3; ++k) {
                 const float a = world.positions[tri[0]][k], bb = world.positions[tri[1]][k], c = world.positions[tri[2]][k];
                 // Float corners: the exact box is a float box; one ulp outward keeps boxes that
