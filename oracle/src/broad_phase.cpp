@@ -3,6 +3,8 @@
 // Embree's own narrow phase there (a float test that skips pairs sharing a vertex) is not used.
 #include "broad_phase.h"
 
+#include "cullide/parallel.h"
+
 #include <embree3/rtcore.h>
 
 #include <chrono>
@@ -20,7 +22,13 @@ static_assert(offsetof(Candidate, prim0) == offsetof(RTCCollision, primID0));
 static_assert(offsetof(Candidate, object1) == offsetof(RTCCollision, geomID1));
 static_assert(offsetof(Candidate, prim1) == offsetof(RTCCollision, primID1));
 
+// Embree runs its build and its collision jobs on TBB workers inside libembree, where
+// ThreadSanitizer cannot see the joins: the tokens tell it what rtcCommitScene/rtcCollide
+// guarantee (the caller's writes before, the callbacks' writes after; parallel.h).
+char buildToken, collideBefore, collideAfter;
+
 void boundsFn(const RTCBoundsFunctionArguments* args) {
+    tsanAcquire(&buildToken);
     const Box& b = static_cast<const std::vector<Box>*>(args->geometryUserPtr)->data()[args->primID];
     RTCBounds* o = args->bounds_o;
     o->lower_x = b.lo[0], o->lower_y = b.lo[1], o->lower_z = b.lo[2];
@@ -33,8 +41,10 @@ struct Forward {
 };
 
 void collideFn(void* user, RTCCollision* pairs, unsigned int n) {
+    tsanAcquire(&collideBefore);
     const Forward& f = *static_cast<const Forward*>(user);
     f.fn(f.user, reinterpret_cast<const Candidate*>(pairs), n);
+    tsanRelease(&collideAfter);
 }
 
 struct DeviceDeleter {
@@ -77,6 +87,7 @@ BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateF
         prims += objects[i].size();
     }
     check(device.get(), "geometry setup");
+    tsanRelease(&buildToken);
     rtcCommitScene(scene.get());
     check(device.get(), "rtcCommitScene");
     times.buildSeconds = seconds(t0);
@@ -84,7 +95,9 @@ BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateF
 
     t0 = std::chrono::steady_clock::now();
     Forward f{fn, user};
+    tsanRelease(&collideBefore);
     rtcCollide(scene.get(), scene.get(), collideFn, &f);
+    tsanAcquire(&collideAfter);
     check(device.get(), "rtcCollide");
     times.collideSeconds = seconds(t0);
     return times;

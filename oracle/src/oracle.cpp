@@ -6,8 +6,9 @@
 #include "cullide/error.h"
 #include "cullide/oracle/predicates.h"
 
+#include "cullide/parallel.h"
+
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <bit>
@@ -127,7 +128,7 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
         const size_t n = world.triangles.size();
         std::vector<char>& degen = degenerate[o];
         degen.assign(n, 0);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        parallelFor(0, n, 4096, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t t = r.begin(); t != r.end(); ++t) {
                 if (subset && !(*subset)[o][t]) continue;
                 const Triangle& tri = world.triangles[t];  // the file's indices: a repeat is degenerate
