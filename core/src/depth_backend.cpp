@@ -173,10 +173,31 @@ void CommandList::draw(uint32_t first, uint32_t count) {
     ++draws_;
 }
 
+void CommandList::clearIntervals() {
+    commands_.push_back(Command{Command::Op::ClearIntervals});
+    ++conservative_;
+}
+
+void CommandList::drawConservative(uint32_t first, uint32_t count, bool test, bool write) {
+    if (!test && !write) throw InputError("command list", "a conservative draw must test, write or both");
+    if (uint64_t(first) + count > std::numeric_limits<uint32_t>::max())
+        throw InputError("command list", "draw range [" + std::to_string(first) + ", +" + std::to_string(count) +
+                                             ") overflows 32-bit triangle indices");
+    Command c{Command::Op::DrawConservative};
+    c.first = first;
+    c.count = count;
+    c.test = test;
+    c.write = write;
+    commands_.push_back(c);
+    ++draws_;
+    ++conservative_;
+}
+
 void CommandList::reset() {
     commands_.clear();
     queries_ = 0;
     draws_ = 0;
+    conservative_ = 0;
     inQuery_ = false;
 }
 

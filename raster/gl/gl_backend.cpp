@@ -268,6 +268,9 @@ public:
     std::vector<uint64_t> execute(const CommandList& list) override {
         if (!haveView_) throw InputError("command list", "execute() before setView()");
         if (list.queryOpen()) throw InputError("command list", "a query is still open at the end of the list");
+        if (list.conservativeCount() > 0)
+            throw InputError("command list", "conservative commands need conservative rasterization, which this GL "
+                                             "backend does not provide (the reliable method is CPU-only)");
         for (const Command& c : list.commands())
             if (c.op == Command::Op::Draw && uint64_t(c.first) + c.count > triangleCount_)
                 throw InputError("command list", "draw of triangles [" + std::to_string(c.first) + ", " +
@@ -311,6 +314,8 @@ public:
                     break;
                 }
                 case Command::Op::EndQuery: glEndQuery(activeTarget); break;
+                case Command::Op::ClearIntervals:
+                case Command::Op::DrawConservative: break;  // refused above
                 case Command::Op::Draw:
                     if (c.count > 0)
                         glDrawElements(GL_TRIANGLES, GLsizei(uint64_t(c.count) * 3), GL_UNSIGNED_INT,

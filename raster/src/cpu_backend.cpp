@@ -25,6 +25,7 @@
 // and the counts do not depend on scheduling.
 #include "cullide/raster/cpu_backend.h"
 
+#include "conservative.h"
 #include "cullide/error.h"
 #include "reference_path.h"
 #include "triangle_setup.h"
@@ -66,6 +67,8 @@ struct TileRect {
 
 struct Event {
     bool clear = false;
+    bool intervalClear = false;                 // ClearIntervals
+    bool conservative = false, test = false, write = false;  // DrawConservative
     DepthFunc func = DepthFunc::Less;
     bool mask = true;
     int32_t query = -1;
@@ -142,6 +145,45 @@ void rasterizeInTile(const EdgeTri& t, int bx0, int by0, int bx1, int by1, uint3
     passed += pass;
 }
 
+// Conservative mode (rules 10-13): a record and its fast-path edge functions.
+struct ConsRec {
+    detail::ConsTri t;
+    detail::ConsEdges e;
+};
+
+// One conservative record clipped to a pixel rectangle: test and/or merge intervals.
+void rasterizeConservative(const ConsRec& r, int bx0, int by0, int bx1, int by1, uint32_t* ilo, uint32_t* ihi,
+                           size_t stride, bool test, bool write, const DepthFormat& format, uint64_t& fragments,
+                           uint64_t& passed) {
+    const detail::ConsTri& t = r.t;
+    const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
+    const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
+    if (x0 > x1 || y0 > y1) return;
+    const int64_t a0 = r.e.a[0], a1 = r.e.a[1], a2 = r.e.a[2];
+    uint64_t frag = 0, pass = 0;
+    for (int j = y0; j <= y1; ++j) {
+        int64_t e0 = a0 * x0 + r.e.b[0] * j + r.e.c[0];
+        int64_t e1 = a1 * x0 + r.e.b[1] * j + r.e.c[1];
+        int64_t e2 = a2 * x0 + r.e.b[2] * j + r.e.c[2];
+        const size_t row = size_t(j) * stride;
+        for (int i = x0; i <= x1; ++i, e0 += a0, e1 += a1, e2 += a2) {
+            if ((e0 | e1 | e2) < 0) continue;
+            ++frag;
+            uint32_t lo, hi;
+            detail::consInterval(t, i, j, format, lo, hi);
+            uint32_t& slo = ilo[row + size_t(i)];
+            uint32_t& shi = ihi[row + size_t(i)];
+            if (test) pass += intervalConflicts(lo, hi, slo, shi) ? 1 : 0;
+            if (write) {
+                slo = std::min(slo, lo);
+                shi = std::max(shi, hi);
+            }
+        }
+    }
+    fragments += frag;
+    passed += pass;
+}
+
 using RasterFn = void (*)(const EdgeTri&, int, int, int, int, uint32_t*, size_t, bool, int, uint64_t&, uint64_t&);
 
 template <bool Float>
@@ -191,6 +233,19 @@ public:
 
     const CpuBackendOptions& options() const override { return options_; }
     const RasterStats& lastStats() const override { return stats_; }
+    bool supportsConservative() const override { return true; }
+
+    IntervalImage readIntervals() override {
+        IntervalImage img;
+        if (!haveView_) return img;
+        img.width = view_.width;
+        img.height = view_.height;
+        img.format = view_.depth;
+        ensureIntervals();
+        img.lo = ilo_;
+        img.hi = ihi_;
+        return img;
+    }
 
     void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override {
         const size_t n = positions.size();
@@ -222,6 +277,8 @@ public:
             tilesX_ = (view.width + options_.tileSize - 1) / options_.tileSize;
             tilesY_ = (view.height + options_.tileSize - 1) / options_.tileSize;
             tileOut_.assign(size_t(tilesX_) * size_t(tilesY_), TileOut{});
+            ilo_.clear();  // the interval buffer is made (empty) on first use
+            ihi_.clear();
         }
     }
 
@@ -229,7 +286,8 @@ public:
         if (!haveView_) throw InputError("command list", "execute() before setView()");
         if (list.queryOpen()) throw InputError("command list", "a query is left open at the end of the list");
         for (const Command& c : list.commands())
-            if (c.op == Command::Op::Draw && uint64_t(c.first) + c.count > triangles_.size())
+            if ((c.op == Command::Op::Draw || c.op == Command::Op::DrawConservative) &&
+                uint64_t(c.first) + c.count > triangles_.size())
                 throw InputError("command list", "draw range [" + std::to_string(c.first) + ", " +
                                                      std::to_string(uint64_t(c.first) + c.count) +
                                                      ") exceeds the geometry's " + std::to_string(triangles_.size()) +
@@ -238,9 +296,14 @@ public:
         std::vector<uint64_t> results;
         inArena([&] {
             updateWindow();
+            if (list.conservativeCount() > 0) {
+                ensureIntervals();
+                if (!consErrValid_) consErr_ = detail::windowError(view_, positions_);
+                consErrValid_ = true;
+            }
             if (options_.scalarReference)
                 results = detail::executeReference(list, window_, triangles_, params_, view_.depth, state_, depth_,
-                                                   stats_);
+                                                   stats_, {&ilo_, &ihi_, consErr_});
             else
                 results = executeFast(list);
         });
@@ -258,8 +321,77 @@ public:
     }
 
 private:
+    void ensureIntervals() {
+        const size_t n = size_t(view_.width) * size_t(view_.height);
+        if (ilo_.size() == n) return;
+        ilo_.assign(n, kEmptyIntervalLo);
+        ihi_.assign(n, kEmptyIntervalHi);
+    }
+
+    // Conservative records of the union of the conservative draw ranges (rules 10-12), compacted
+    // in triangle order like setupDrawn's: a draw [first, first+count) is the record range
+    // [consBegin_[first], consEnd_[first+count-1]).
+    void setupConservativeDrawn(const CommandList& list) {
+        std::vector<std::array<uint32_t, 2>> rs, merged;
+        for (const Command& c : list.commands())
+            if (c.op == Command::Op::DrawConservative && c.count > 0) rs.push_back({c.first, c.first + c.count});
+        std::sort(rs.begin(), rs.end());
+        for (const auto& r : rs) {
+            if (!merged.empty() && r[0] <= merged.back()[1]) merged.back()[1] = std::max(merged.back()[1], r[1]);
+            else merged.push_back(r);
+        }
+        std::vector<std::array<uint32_t, 2>> chunks;
+        for (const auto& r : merged)
+            for (uint32_t b = r[0]; b < r[1]; b += kSetupChunk) chunks.push_back({b, std::min(r[1], b + kSetupChunk)});
+        if (consFlags_.size() < triangles_.size()) {
+            consFlags_.resize(triangles_.size());
+            consBegin_.resize(triangles_.size());
+            consEnd_.resize(triangles_.size());
+        }
+        std::vector<std::vector<ConsRec>> recs(chunks.size());
+        std::vector<std::vector<TileRect>> tiles(chunks.size());
+        const int ts = options_.tileSize;
+        parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t ci = r.begin(); ci != r.end(); ++ci) {
+                for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) {
+                    const Triangle& tri = triangles_[t];
+                    consBegin_[t] = uint32_t(recs[ci].size());
+                    ConsRec rec;
+                    const bool ok =
+                        detail::setupConservative(window_[tri[0]], window_[tri[1]], window_[tri[2]], params_, consErr_, rec.t);
+                    consFlags_[t] = ok ? 0 : detail::kRejected;
+                    if (ok) {
+                        rec.e = detail::consEdges(rec.t, params_.subpixelBits);
+                        recs[ci].push_back(rec);
+                        tiles[ci].push_back(TileRect{uint16_t(rec.t.x0 / ts), uint16_t(rec.t.y0 / ts),
+                                                     uint16_t(rec.t.x1 / ts), uint16_t(rec.t.y1 / ts)});
+                    }
+                    consEnd_[t] = uint32_t(recs[ci].size());
+                }
+            }
+        });
+        size_t total = 0;
+        std::vector<size_t> offset(chunks.size() + 1, 0);
+        for (size_t ci = 0; ci < chunks.size(); ++ci) offset[ci + 1] = offset[ci] + recs[ci].size();
+        total = offset.back();
+        CULLIDE_CHECK(total < size_t(UINT32_MAX), "too many conservative records for 32-bit indices");
+        consRecords_.resize(total);
+        consTiles_.resize(total);
+        parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t ci = r.begin(); ci != r.end(); ++ci) {
+                std::copy(recs[ci].begin(), recs[ci].end(), consRecords_.begin() + ptrdiff_t(offset[ci]));
+                std::copy(tiles[ci].begin(), tiles[ci].end(), consTiles_.begin() + ptrdiff_t(offset[ci]));
+                for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) {
+                    consBegin_[t] += uint32_t(offset[ci]);
+                    consEnd_[t] += uint32_t(offset[ci]);
+                }
+            }
+        });
+    }
+
     void updateWindow() {
         if (windowValid_) return;
+        consErrValid_ = false;
         window_.resize(positions_.size());
         snapped_.resize(positions_.size());
         parallelFor(0, positions_.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
@@ -429,6 +561,11 @@ private:
     std::vector<uint64_t> executeFast(const CommandList& list) {
         setupDrawn(list);
         binToTiles(records_.size(), [&](size_t i) { return recTiles_[i]; }, tileRecStart_, tileRecs_);
+        const bool conservative = list.conservativeCount() > 0;
+        if (conservative) {
+            setupConservativeDrawn(list);
+            binToTiles(consRecords_.size(), [&](size_t i) { return consTiles_[i]; }, consTileStart_, consTileRecs_);
+        }
 
         // Step 5: events with their state.
         events_.clear();
@@ -452,6 +589,29 @@ private:
                     kinds[size_t(query)] = c.queryKind;
                     break;
                 case Command::Op::EndQuery: query = -1; break;
+                case Command::Op::ClearIntervals: {
+                    Event e;
+                    e.intervalClear = true;
+                    e.tiles = all;
+                    events_.push_back(e);
+                    break;
+                }
+                case Command::Op::DrawConservative: {
+                    ++stats_.draws;
+                    stats_.triangles += c.count;
+                    if (c.count == 0) break;
+                    Event e;
+                    e.conservative = true;
+                    e.test = c.test;
+                    e.write = c.write;
+                    e.query = query;
+                    e.first = c.first;
+                    e.count = c.count;
+                    e.recBegin = consBegin_[c.first];
+                    e.recEnd = consEnd_[c.first + c.count - 1];
+                    events_.push_back(e);
+                    break;
+                }
                 case Command::Op::Draw: {
                     ++stats_.draws;
                     stats_.triangles += c.count;
@@ -474,10 +634,11 @@ private:
         parallelFor(0, events_.size(), 256, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t k = r.begin(); k != r.end(); ++k) {
                 Event& e = events_[k];
-                if (e.clear) continue;
+                if (e.clear || e.intervalClear) continue;
+                const std::vector<TileRect>& rects = e.conservative ? consTiles_ : recTiles_;
                 int tx0 = tilesX_, ty0 = tilesY_, tx1 = -1, ty1 = -1;
                 for (uint32_t i = e.recBegin; i < e.recEnd; ++i) {
-                    const TileRect& t = recTiles_[i];
+                    const TileRect& t = rects[i];
                     tx0 = std::min<int>(tx0, t.tx0);
                     ty0 = std::min<int>(ty0, t.ty0);
                     tx1 = std::max<int>(tx1, t.tx1);
@@ -485,6 +646,10 @@ private:
                 }
                 e.tiles = tx1 < 0 ? TileRect{1, 1, 0, 0} : TileRect{uint16_t(tx0), uint16_t(ty0), uint16_t(tx1), uint16_t(ty1)};
                 std::array<uint32_t, 3>& s = eventStats_[k];
+                if (e.conservative) {  // only rejections: nothing is clipped, zero area is drawn
+                    for (uint32_t t = e.first; t < e.first + e.count; ++t) s[0] += consFlags_[t] ? 1 : 0;
+                    continue;
+                }
                 for (uint32_t t = e.first; t < e.first + e.count; ++t) {
                     const uint8_t f = triFlags_[t];
                     s[0] += (f & detail::kRejected) ? 1 : 0;
@@ -514,12 +679,37 @@ private:
                 const int bx1 = std::min(bx0 + ts, W) - 1, by1 = std::min(by0 + ts, H) - 1;
                 const uint32_t* recs = tileRecs_.data() + tileRecStart_[tile];
                 const size_t nrecs = tileRecStart_[tile + 1] - tileRecStart_[tile];
-                size_t hint = 0;
+                size_t hint = 0, consHint = 0;
                 for (uint32_t k = tileEvStart_[tile]; k < tileEvStart_[tile + 1]; ++k) {
                     const Event& e = events_[tileEvs_[k]];
                     if (e.clear) {
                         for (int j = by0; j <= by1; ++j)
                             std::fill_n(depth_.data() + size_t(j) * size_t(W) + size_t(bx0), bx1 - bx0 + 1, e.clearValue);
+                        continue;
+                    }
+                    if (e.intervalClear) {
+                        for (int j = by0; j <= by1; ++j) {
+                            std::fill_n(ilo_.data() + size_t(j) * size_t(W) + size_t(bx0), bx1 - bx0 + 1, kEmptyIntervalLo);
+                            std::fill_n(ihi_.data() + size_t(j) * size_t(W) + size_t(bx0), bx1 - bx0 + 1, kEmptyIntervalHi);
+                        }
+                        continue;
+                    }
+                    if (e.conservative) {
+                        const uint32_t* crecs = consTileRecs_.data() + consTileStart_[tile];
+                        const size_t ncrecs = consTileStart_[tile + 1] - consTileStart_[tile];
+                        size_t p = gallopLowerBound(crecs, ncrecs, consHint, e.recBegin);
+                        const uint64_t before = out.passed;
+                        for (; p < ncrecs && crecs[p] < e.recEnd; ++p)
+                            rasterizeConservative(consRecords_[crecs[p]], bx0, by0, bx1, by1, ilo_.data(), ihi_.data(),
+                                                  size_t(W), e.test, e.write, view_.depth, out.fragments, out.passed);
+                        consHint = p;
+                        const uint64_t n = out.passed - before;
+                        if (e.query >= 0 && n > 0) {
+                            if (!out.queries.empty() && out.queries.back().query == uint32_t(e.query))
+                                out.queries.back().count += n;
+                            else
+                                out.queries.push_back({uint32_t(e.query), n});
+                        }
                         continue;
                     }
                     size_t p = gallopLowerBound(recs, nrecs, hint, e.recBegin);
@@ -609,6 +799,16 @@ private:
     std::vector<std::array<uint32_t, 3>> eventStats_;
     std::vector<uint32_t> tileEvStart_, tileEvs_;
     std::vector<TileOut> tileOut_;
+
+    // Conservative mode: the interval buffer, toWindow's error bound, records and bins.
+    std::vector<uint32_t> ilo_, ihi_;
+    detail::WindowError consErr_;
+    bool consErrValid_ = false;
+    std::vector<uint8_t> consFlags_;
+    std::vector<uint32_t> consBegin_, consEnd_;
+    std::vector<ConsRec> consRecords_;
+    std::vector<TileRect> consTiles_;
+    std::vector<uint32_t> consTileStart_, consTileRecs_;
 };
 
 }  // namespace

@@ -4,6 +4,8 @@
 // snapped vertices directly, E_k(p) = (v[k+1] - v[k]) x (p - v[k]) at every pixel centre p.
 #include "reference_path.h"
 
+#include <algorithm>
+
 namespace cullide::raster::detail {
 
 namespace {
@@ -23,7 +25,7 @@ bool covers(const SnappedTri& t, int64_t px, int64_t py, FillRule rule) {
 std::vector<uint64_t> executeReference(const CommandList& list, std::span<const WinVertex> window,
                                        std::span<const Triangle> triangles, const SetupParams& params,
                                        const DepthFormat& format, PipelineState& state, std::vector<uint32_t>& depth,
-                                       RasterStats& stats) {
+                                       RasterStats& stats, const IntervalState& intervals) {
     std::vector<uint64_t> results(list.queryCount(), 0);
     std::vector<QueryKind> kinds(list.queryCount());
     int64_t query = -1;
@@ -41,6 +43,39 @@ std::vector<uint64_t> executeReference(const CommandList& list, std::span<const 
                 kinds[size_t(query)] = c.queryKind;
                 break;
             case Command::Op::EndQuery: query = -1; break;
+            case Command::Op::ClearIntervals:
+                std::fill(intervals.lo->begin(), intervals.lo->end(), kEmptyIntervalLo);
+                std::fill(intervals.hi->begin(), intervals.hi->end(), kEmptyIntervalHi);
+                break;
+            case Command::Op::DrawConservative:
+                ++stats.draws;
+                for (uint32_t t = c.first; t < c.first + c.count; ++t) {
+                    ++stats.triangles;
+                    const Triangle& tri = triangles[t];
+                    ConsTri ct;
+                    if (!setupConservative(window[tri[0]], window[tri[1]], window[tri[2]], params, intervals.error, ct)) {
+                        ++stats.rejected;
+                        continue;
+                    }
+                    for (int j = 0; j < H; ++j)
+                        for (int i = 0; i < W; ++i) {
+                            if (!consCoversReference(ct, i, j, S)) continue;
+                            ++stats.fragments;
+                            uint32_t lo, hi;
+                            consInterval(ct, i, j, format, lo, hi);
+                            uint32_t& slo = (*intervals.lo)[size_t(j) * size_t(W) + size_t(i)];
+                            uint32_t& shi = (*intervals.hi)[size_t(j) * size_t(W) + size_t(i)];
+                            if (c.test && intervalConflicts(lo, hi, slo, shi)) {
+                                ++stats.passed;
+                                if (query >= 0) ++results[size_t(query)];
+                            }
+                            if (c.write) {
+                                slo = std::min(slo, lo);
+                                shi = std::max(shi, hi);
+                            }
+                        }
+                }
+                break;
             case Command::Op::Draw:
                 ++stats.draws;
                 for (uint32_t t = c.first; t < c.first + c.count; ++t) {

@@ -149,6 +149,9 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
                 kinds[size_t(query)] = c.queryKind;
                 break;
             case Command::Op::EndQuery: query = -1; break;
+            case Command::Op::ClearIntervals:
+            case Command::Op::DrawConservative:
+                throw InputError("command list", "validation covers the GL-like commands only, not conservative ones");
             case Command::Op::Draw:
                 if (uint64_t(c.first) + c.count > triangles_.size())
                     throw InputError("command list", "draw range outside the geometry");

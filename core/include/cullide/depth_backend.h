@@ -19,6 +19,17 @@
 //   - State persists across execute() calls, as in GL: depth buffer contents, depth function
 //     (initially LESS), depth mask (initially true). Changing the viewport size makes the depth
 //     contents undefined until the next clear.
+//   - Conservative mode (optional; supportsConservative()): a second buffer, the *interval
+//     buffer*, holds per pixel [lo, hi] in the stored representation of the depth format, the
+//     union (min of lo, max of hi) of the conservative fragments written since its last clear
+//     (cleared: empty, lo = max code, hi = 0). A conservative fragment exists at every pixel whose
+//     closed square the triangle overlaps at all (degenerate triangles included), with the
+//     interval of the triangle's depth over that pixel, clamped to the triangle's own depth range
+//     and rounded outwards in the depth format. Its test "conflicts" unless the interval lies
+//     strictly in front of (hi < stored lo) or strictly behind (lo > stored hi) everything stored
+//     at the pixel; a query counts conflicting fragments. The GL depth buffer, functions and mask
+//     are not involved. Used by the reliable method (docs/reliable.md); the CPU backend's rules
+//     are in cullide/raster/rules.h.
 #pragma once
 
 #include "cullide/mesh.h"
@@ -95,13 +106,18 @@ struct OrthoView {
 
 // One recorded command. Use CommandList's methods to build them.
 struct Command {
-    enum class Op : uint8_t { Clear, SetDepthFunc, SetDepthMask, BeginQuery, EndQuery, Draw };
+    enum class Op : uint8_t {
+        Clear, SetDepthFunc, SetDepthMask, BeginQuery, EndQuery, Draw,
+        ClearIntervals,     // conservative mode: empty every pixel's interval
+        DrawConservative,   // conservative mode: triangles [first, first+count) with test/write below
+    };
     Op op;
     DepthFunc func = DepthFunc::Less;          // SetDepthFunc
     QueryKind queryKind = QueryKind::SamplesPassed;  // BeginQuery
     bool mask = true;                          // SetDepthMask
     double clearDepth = 1.0;                   // Clear: window-space depth in [0,1]
-    uint32_t first = 0, count = 0;             // Draw: triangles [first, first+count)
+    uint32_t first = 0, count = 0;             // Draw, DrawConservative: triangles [first, first+count)
+    bool test = false, write = false;          // DrawConservative: count conflicts / merge intervals
 };
 
 // A command list: what one reducePCS pass (or any depth-only workload) asks a backend to do.
@@ -118,7 +134,16 @@ public:
     uint32_t beginQuery(QueryKind kind = QueryKind::SamplesPassed);  // returns the query's index
     void endQuery();
     void draw(uint32_t first, uint32_t count);
+    // Conservative mode (see the conventions; only for a backend whose supportsConservative()):
+    // clearIntervals() empties the interval buffer; drawConservative() rasterizes the triangles
+    // conservatively and, per fragment, first tests it against the stored interval when `test`
+    // (inside a query, a conflicting fragment counts as a passed sample), then merges its interval
+    // into the stored one when `write`. Throws InputError("command list", ...) when neither is set
+    // or the range overflows, like draw().
+    void clearIntervals();
+    void drawConservative(uint32_t first, uint32_t count, bool test, bool write);
     bool queryOpen() const { return inQuery_; }
+    size_t conservativeCount() const { return conservative_; }  // ClearIntervals + DrawConservative
 
     const std::vector<Command>& commands() const { return commands_; }
     uint32_t queryCount() const { return queries_; }
@@ -129,6 +154,7 @@ private:
     std::vector<Command> commands_;
     uint32_t queries_ = 0;
     size_t draws_ = 0;
+    size_t conservative_ = 0;
     bool inQuery_ = false;
 };
 
@@ -161,7 +187,12 @@ public:
     // Executes the commands in order and returns one result per query (index = query number).
     // Draw ranges must lie inside the current geometry and no query may be left open; otherwise
     // throws InputError("command list", ...) before executing anything. Needs setView() first.
+    // A backend without supportsConservative() must refuse conservative commands the same way.
     virtual std::vector<uint64_t> execute(const CommandList& commands) = 0;
+
+    // Whether execute() implements the conservative commands (ClearIntervals, DrawConservative).
+    // The CPU reference does; GL only where the driver offers conservative rasterization.
+    virtual bool supportsConservative() const { return false; }
 
     // The current depth buffer.
     virtual DepthImage readDepth() = 0;

@@ -16,6 +16,9 @@
 //   - scalar reference (`scalarReference = true`): one thread, commands in order, each triangle
 //     tested at every pixel centre of the viewport with edge functions evaluated from scratch.
 //     Slow (O(pixels) per triangle) and obviously correct; used by the differential tests.
+// Both also implement the conservative mode (supportsConservative(): rules 10-13 of rules.h): the
+// fast path sets up and bins conservative records like the others and walks them per tile; the
+// reference tests every pixel of the viewport with the separating-axis test from scratch.
 #pragma once
 
 #include "cullide/depth_backend.h"
@@ -23,6 +26,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 namespace cullide::raster {
 
@@ -48,10 +52,26 @@ struct RasterStats {
     friend bool operator==(const RasterStats&, const RasterStats&) = default;
 };
 
+// The interval buffer of the conservative mode (depth_backend.h, rules 10-13 of rules.h), for
+// tests and pictures: per pixel the stored codes [lo, hi]; row 0 at the bottom. An empty pixel
+// holds lo = kEmptyIntervalLo, hi = kEmptyIntervalHi.
+struct IntervalImage {
+    int width = 0, height = 0;
+    DepthFormat format;
+    std::vector<uint32_t> lo, hi;
+
+    bool covered(int x, int y) const {
+        const size_t k = size_t(y) * size_t(width) + size_t(x);
+        return lo[k] <= hi[k];
+    }
+};
+
 class CpuBackend : public DepthBackend {
 public:
     ~CpuBackend() override = default;
     virtual const CpuBackendOptions& options() const = 0;
+    // The interval buffer (empty before the first conservative command after a viewport change).
+    virtual IntervalImage readIntervals() = 0;
     // Counters of the most recent execute() (zero before the first).
     virtual const RasterStats& lastStats() const = 0;
 };

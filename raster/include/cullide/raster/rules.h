@@ -62,6 +62,29 @@
 //   9. Occlusion queries count the fragments passing the depth test (SAMPLES_PASSED) or report
 //      whether any did (ANY_SAMPLES_PASSED), exactly, independent of the thread count.
 //
+// Conservative mode (the interval buffer of depth_backend.h; raster/src/conservative.h has the
+// derivations). It shares rules 1 and 3 and the storage formats of rule 7, nothing else:
+//  10. No clipping: a triangle is dropped only when its double bounding box lies entirely beyond
+//      one side of the viewport; z outside [0, 1] is clamped in the interval (monotonic, so two
+//      triangles sharing a point still share the clamped depth). A vertex beyond the guard band
+//      (cannot be snapped safely) makes the triangle cover its whole bounding box.
+//  11. Coverage: pixel (i, j) is covered when the snapped triangle meets the closed pixel square
+//      dilated by D subpixels on every side, decided exactly in 64-bit integers by separating axes
+//      (the bounding box, then the three edge normals; for a snapped segment its normal, for a
+//      point nothing more). D = 1 + ceil(2^S * e_xy), e_xy a bound of toWindow's rounding error in
+//      pixels for this view: snapping moves a point by <= 1/2 subpixel per axis, so any pixel the
+//      exact triangle touches is covered. Zero-area and edge-on triangles are drawn as the segment
+//      or point they are.
+//  12. Depth interval over a covered pixel: the plane (from the unsnapped double vertices) over the
+//      dilated square, widened by its own evaluation error, clamped to the triangle's vertex depth
+//      range, widened by e_z (toWindow's error in depth), clamped to [0, 1]; the plane is skipped
+//      (vertex range only) when its determinant is not well above its rounding error. Stored codes
+//      are rounded outwards: lo = the largest code <= lo, hi = the smallest code >= hi
+//      (encodeDepthDown/Up), exactly.
+//  13. Test: a fragment [lo, hi] conflicts with the stored [slo, shi] unless hi < slo or lo > shi;
+//      the write stores [min(lo, slo), max(hi, shi)]. Cleared: slo = 0xffffffff, shi = 0 (an empty
+//      pixel conflicts only with a fragment spanning every code, never in a fitted view).
+//
 // Consequences for Cullide (paper Section 5): two fragments at the same centre whose computed
 // depths differ by at least one stored step, 1/(2^n - 1) in window depth, i.e. a penetration of
 // (far - near)/(2^n - 1) along the view, get different stored values (round(x + 1) = round(x) + 1
@@ -161,6 +184,46 @@ inline uint32_t encodeDepth(double z, const DepthFormat& format) {
     z = clampDepth(z);
     if (format.kind == DepthFormat::Kind::Float32) return std::bit_cast<uint32_t>(float(z));
     return encodeUnorm(z, format.bits);
+}
+
+// Rule 12: the largest stored code whose value is <= z, and the smallest whose value is >= z, for
+// z in [0, 1] (clamped first). Unorm: z*(2^n - 1) = f + (r - z) as in encodeUnorm, with r - z in
+// (-1, 1) and its sign exact (the sign of a rounded difference is the sign of the difference), so
+// floor = f - [r < z] and ceil = f + [r > z]. Float: the nearest float, stepped once when it lies
+// on the wrong side (the comparison in double is exact).
+inline uint32_t encodeDepthDown(double z, const DepthFormat& format) {
+    z = clampDepth(z);
+    if (format.kind == DepthFormat::Kind::Float32) {
+        float f = float(z);
+        if (double(f) > z) f = std::nextafter(f, 0.0f);
+        return std::bit_cast<uint32_t>(f);
+    }
+    if (z >= 1.0) return uint32_t((uint64_t(1) << format.bits) - 1);  // r - z = -1: outside (-1, 1)
+    const double a = z * double(uint64_t(1) << format.bits);
+    const double f = double(int64_t(a));
+    const double r = a - f;
+    return uint32_t(int64_t(f) - (r < z ? 1 : 0));
+}
+
+inline uint32_t encodeDepthUp(double z, const DepthFormat& format) {
+    z = clampDepth(z);
+    if (format.kind == DepthFormat::Kind::Float32) {
+        float f = float(z);
+        if (double(f) < z) f = std::nextafter(f, 2.0f);
+        return std::bit_cast<uint32_t>(f);
+    }
+    if (z >= 1.0) return uint32_t((uint64_t(1) << format.bits) - 1);  // r - z = -1: outside (-1, 1)
+    const double a = z * double(uint64_t(1) << format.bits);
+    const double f = double(int64_t(a));
+    const double r = a - f;
+    return uint32_t(int64_t(f) + (r > z ? 1 : 0));
+}
+
+// Rule 13: the cleared interval, and the conflict test on stored codes.
+inline constexpr uint32_t kEmptyIntervalLo = 0xffffffffu;
+inline constexpr uint32_t kEmptyIntervalHi = 0;
+constexpr bool intervalConflicts(uint32_t lo, uint32_t hi, uint32_t storedLo, uint32_t storedHi) {
+    return hi >= storedLo && lo <= storedHi;
 }
 
 }  // namespace cullide::raster
