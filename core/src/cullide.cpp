@@ -3,6 +3,7 @@
 #include "cullide/cullide.h"
 
 #include "cullide/error.h"
+#include "reliable.h"
 
 #include <tbb/parallel_for.h>
 
@@ -22,12 +23,20 @@ double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(
 
 }  // namespace
 
-const char* toString(CullMethod m) { return m == CullMethod::Original ? "original" : "modified"; }
+const char* toString(CullMethod m) {
+    switch (m) {
+        case CullMethod::Original: return "original";
+        case CullMethod::Modified: return "modified";
+        case CullMethod::Reliable: return "reliable";
+    }
+    return "?";
+}
 
 CullMethod parseCullMethod(const std::string& text) {
     if (text == "original") return CullMethod::Original;
     if (text == "modified") return CullMethod::Modified;
-    throw InputError("option --method", "unknown method '" + text + "' (expected original or modified)");
+    if (text == "reliable") return CullMethod::Reliable;
+    throw InputError("option --method", "unknown method '" + text + "' (expected original, modified or reliable)");
 }
 
 std::vector<Vec3d> axisDirections() {
@@ -153,6 +162,11 @@ public:
         build(result);
 
         std::vector<Item> pcs;
+        if (opt_.method == CullMethod::Reliable) {
+            runReliable(result);
+            result.totalSeconds = secondsSince(start);
+            return result;
+        }
         for (uint32_t i = 0; i < hierarchies_.size(); ++i)
             if (!hierarchies_[i].nodes.empty() && hierarchies_[i].nodes[0].count > 0) pcs.push_back(item(i, 0));
 
@@ -232,6 +246,118 @@ private:
     Item item(uint32_t object, uint32_t nodeIndex) const {
         const HierarchyNode& n = hierarchies_[object].nodes[nodeIndex];
         return {object, nodeIndex, {triangleOffset_[object] + n.first, n.count}};
+    }
+
+    // The reliable method (docs/reliable.md): straight to the leaves, whose internal and adjacent
+    // pairs only an exact check can clear (a node above them can never be pruned soundly without
+    // knowing its own pairs); then one reliable reducePCS per direction.
+    void runReliable(CullideResult& result) {
+        std::vector<Item> pcs;
+        uint32_t depth = 0;
+        for (uint32_t i = 0; i < hierarchies_.size(); ++i) {
+            const Hierarchy& h = hierarchies_[i];
+            std::vector<Item> leaves;
+            for (uint32_t k = 0; k < h.nodes.size(); ++k)
+                if (h.nodes[k].isLeaf() && h.nodes[k].count > 0) {
+                    leaves.push_back(item(i, k));
+                    depth = std::max(depth, h.nodes[k].depth);
+                }
+            std::sort(leaves.begin(), leaves.end(), [](const Item& a, const Item& b) { return a.range.first < b.range.first; });
+            pcs.insert(pcs.end(), leaves.begin(), leaves.end());
+        }
+        result.levels = pcs.empty() ? 0 : 1;
+        // Exact checks, once: pairs inside a leaf and between leaves sharing a vertex.
+        ranges_.clear();
+        for (const Item& it : pcs) ranges_.push_back(it.range);
+        const detail::UnitGraph all = detail::unitAdjacency(triangles_, ranges_);
+        const std::vector<uint8_t> hits = detail::exactHits(positions_, triangles_, ranges_, all);
+        exactHit_.assign(hierarchies_.size(), {});
+        for (uint32_t i = 0; i < hierarchies_.size(); ++i) exactHit_[i].assign(hierarchies_[i].nodes.size(), 0);
+        for (size_t u = 0; u < pcs.size(); ++u) exactHit_[pcs[u].object][pcs[u].node] = hits[u];
+        for (uint32_t d = 0; d < opt_.directions.size() && !pcs.empty(); ++d)
+            pcs = reduceReliable(pcs, depth, d, result.passes);
+        result.pcs = expand(pcs);
+    }
+
+    // One reliable reducePCS call in direction d (docs/reliable.md). Units are the PCS leaves.
+    // Per class b of a distance-2 colouring of the units' vertex-sharing graph, with an emptied
+    // interval buffer: forward, for each unit y of b in order, test every unit whose (unique)
+    // neighbour in b is y, test y, then write y; then test the units with no neighbour in b.
+    // Reverse: the same in reverse order without the last step. Every unit X is thus tested
+    // against every other unit not adjacent to it, exactly once per side, and never against a
+    // unit it shares a vertex with.
+    std::vector<Item> reduceReliable(const std::vector<Item>& pcs, uint32_t level, uint32_t d,
+                                     std::vector<PassStats>& passes) {
+        const auto start = Clock::now();
+        ranges_.clear();
+        for (const Item& it : pcs) ranges_.push_back(it.range);
+        backend_.setView(fitView(positions_, triangles_, ranges_, opt_.directions[d], opt_.width, opt_.height, opt_.depth));
+        const uint32_t n = uint32_t(pcs.size());
+        const detail::UnitGraph g = detail::unitAdjacency(triangles_, ranges_);
+        const std::vector<uint32_t> colour = detail::distanceTwoColouring(g);
+        const uint32_t classes = n == 0 ? 0 : *std::max_element(colour.begin(), colour.end()) + 1;
+        std::vector<std::vector<uint32_t>> members(classes);
+        for (uint32_t u = 0; u < n; ++u) members[colour[u]].push_back(u);
+
+        list_.reset();
+        std::vector<std::pair<uint32_t, uint32_t>> queries;  // (unit, query)
+        auto test = [&](uint32_t u) {
+            queries.push_back({u, list_.beginQuery(QueryKind::AnySamplesPassed)});
+            list_.drawConservative(pcs[u].range.first, pcs[u].range.count, true, false);
+            list_.endQuery();
+        };
+        std::vector<int64_t> matched(n);
+        std::vector<std::vector<uint32_t>> matchedTo;
+        for (uint32_t b = 0; b < classes; ++b) {
+            // matched[x]: x's neighbour of class b (at most one, by the colouring), or -1.
+            std::fill(matched.begin(), matched.end(), -1);
+            matchedTo.assign(n, {});
+            for (uint32_t x = 0; x < n; ++x) {
+                if (colour[x] == b) continue;
+                for (uint32_t y : g.neighbours(x))
+                    if (colour[y] == b) {
+                        CULLIDE_CHECK(matched[x] < 0, "distance-2 colouring gave a unit two neighbours of one class");
+                        matched[x] = y;
+                        matchedTo[y].push_back(x);
+                    }
+            }
+            list_.clearIntervals();
+            for (uint32_t y : members[b]) {
+                for (uint32_t x : matchedTo[y]) test(x);
+                test(y);
+                list_.drawConservative(pcs[y].range.first, pcs[y].range.count, false, true);
+            }
+            for (uint32_t x = 0; x < n; ++x)
+                if (colour[x] != b && matched[x] < 0) test(x);
+            list_.clearIntervals();
+            for (size_t k = members[b].size(); k-- > 0;) {
+                const uint32_t y = members[b][k];
+                for (uint32_t x : matchedTo[y]) test(x);
+                test(y);
+                list_.drawConservative(pcs[y].range.first, pcs[y].range.count, false, true);
+            }
+        }
+        const std::vector<uint64_t> results = backend_.execute(list_);
+        std::vector<uint8_t> conflict(n, 0);
+        for (const auto& [u, q] : queries) conflict[u] |= results[q] > 0 ? 1 : 0;
+
+        PassStats st;
+        st.level = level;
+        st.direction = d;
+        st.nodesIn = n;
+        for (const Item& it : pcs) st.trianglesIn += it.range.count;
+        std::vector<Item> kept;
+        for (uint32_t u = 0; u < n; ++u)
+            if (conflict[u] || exactHit_[pcs[u].object][pcs[u].node]) kept.push_back(pcs[u]);
+        st.nodesOut = kept.size();
+        for (const Item& it : kept) st.trianglesOut += it.range.count;
+        for (const Command& c : list_.commands())
+            if (c.op == Command::Op::DrawConservative) st.trianglesRendered += c.count;
+        st.queries = list_.queryCount();
+        st.seconds = secondsSince(start);
+        passes.push_back(st);
+        if (opt_.onPass) opt_.onPass(st, expand(kept));
+        return kept;
     }
 
     // One reducePCS call in direction d: returns the nodes that stay.
@@ -330,12 +456,16 @@ private:
     std::vector<Triangle> triangles_;
     std::vector<TriangleRange> ranges_;
     CommandList list_;
+    std::vector<std::vector<uint8_t>> exactHit_;  // reliable: per object and node, an exact pair may intersect
 };
 
 }  // namespace
 
 CullideResult runCullide(const Scene& scene, DepthBackend& backend, const CullideOptions& options) {
     options.validate();
+    if (options.method == CullMethod::Reliable && !backend.supportsConservative())
+        throw InputError("option --method", "reliable is CPU-only: this backend (" + backend.describe() +
+                                                ") has no conservative rasterization");
     return Culler(scene, backend, options).run();
 }
 

@@ -153,8 +153,57 @@ bool setupConservative(const WinVertex& v0, const WinVertex& v1, const WinVertex
         }
     }
     out.zeta = err.z;
+    out.dilationPx = double(out.dilation) / double(one);
+    out.v[0] = v0, out.v[1] = v1, out.v[2] = v2;
     return true;
 }
+
+namespace {
+
+// The depth range of triangle v clipped to the prism over [x0, x1] x [y0, y1] (Sutherland-Hodgman
+// in double, each new point computed from the inside vertex along its edge). Every computed vertex
+// is a point of the triangle up to a few units of roundoff per coordinate, and lies within
+// roundoff of the square; the square is dilated by >= 1/2^S px beyond what soundness needs, far
+// more than the roundoff, so the computed range, widened by its roundoff, contains the range over
+// the needed square. Returns false when nothing is left (the triangle misses the square).
+bool clippedDepthRange(const WinVertex* v, double x0, double x1, double y0, double y1, double& lo, double& hi) {
+    WinVertex a[9], b[9];
+    int n = 3;
+    for (int k = 0; k < 3; ++k) a[k] = v[k];
+    WinVertex* src = a;
+    WinVertex* dst = b;
+    for (int plane = 0; plane < 4; ++plane) {
+        auto dist = [&](const WinVertex& p) {
+            switch (plane) {
+                case 0: return p.x - x0;
+                case 1: return x1 - p.x;
+                case 2: return p.y - y0;
+                default: return y1 - p.y;
+            }
+        };
+        int m = 0;
+        for (int k = 0; k < n; ++k) {
+            const WinVertex &p = src[k], &q = src[(k + 1) % n];
+            const double dp = dist(p), dq = dist(q);
+            if (dp >= 0) dst[m++] = p;
+            if ((dp >= 0) != (dq >= 0)) {
+                const WinVertex& in = dp >= 0 ? p : q;
+                const WinVertex& outv = dp >= 0 ? q : p;
+                const double di = dp >= 0 ? dp : dq, dout = dp >= 0 ? dq : dp;
+                const double t = di / (di - dout);
+                dst[m++] = {in.x + t * (outv.x - in.x), in.y + t * (outv.y - in.y), in.z + t * (outv.z - in.z)};
+            }
+        }
+        n = m;
+        std::swap(src, dst);
+        if (n == 0) return false;
+    }
+    lo = hi = src[0].z;
+    for (int k = 1; k < n; ++k) lo = std::min(lo, src[k].z), hi = std::max(hi, src[k].z);
+    return true;
+}
+
+}  // namespace
 
 void consInterval(const ConsTri& t, int i, int j, const DepthFormat& format, uint32_t& lo, uint32_t& hi) {
     double a = t.zmin, b = t.zmax;
@@ -165,6 +214,15 @@ void consInterval(const ConsTri& t, int i, int j, const DepthFormat& format, uin
         // Empty only when the triangle misses the pixel in truth (the bounds are supersets):
         // any interval is then sound; keep an ordered one.
         if (a > b) std::swap(a, b);
+    } else if (t.shape != ConsTri::Box) {
+        const double d = t.dilationPx;
+        double clo, chi;
+        if (clippedDepthRange(t.v, i - d, i + 1 + d, j - d, j + 1 + d, clo, chi)) {
+            const double r = 64 * kU * (std::max(std::abs(t.zmin), std::abs(t.zmax)) + (t.zmax - t.zmin));
+            a = std::max(a, clo - r);
+            b = std::min(b, chi + r);
+            if (a > b) std::swap(a, b);
+        }
     }
     lo = encodeDepthDown(a - t.zeta, format);
     hi = encodeDepthUp(b + t.zeta, format);

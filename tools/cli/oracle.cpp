@@ -98,7 +98,9 @@ PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const Cu
         const size_t X = size_t(oracle::PairClass::Crossing), T = size_t(oracle::PairClass::Touching);
         size_t promised = 0;
         for (const oracle::MissedPair& m : r.missed)
-            promised += options.method == CullMethod::Modified ? m.pair.cls == oracle::PairClass::Crossing : !m.pair.selfPair();
+            promised += options.method == CullMethod::Reliable   ? true  // every intersecting pair is kept
+                        : options.method == CullMethod::Modified ? m.pair.cls == oracle::PairClass::Crossing
+                                                                 : !m.pair.selfPair();
         out.guaranteeBroken = promised > 0;
         std::printf("  check: %zu intersecting pair(s) (%zu crossing, %zu touching); false prunes: %zu triangle(s) "
                     "(%zu crossing, %zu touching), %zu pair(s) missed (%zu crossing, %zu touching; %zu the method "

@@ -196,7 +196,8 @@ void addPruneCommand(CLI::App& app, Action& action) {
     auto o = std::make_shared<PruneOptions>();
     CLI::App* sub = app.add_subcommand("prune", "Compute the potentially colliding set (PCS) of every frame of a scene");
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
-    sub->add_option("--method", o->method, "original (Cullide, contacts kept) | modified (self-intersections kept)")
+    sub->add_option("--method", o->method, "original (Cullide, contacts kept) | modified (self-intersections kept) | reliable (no intersecting "
+                    "triangle is ever pruned; CPU backend only; docs/reliable.md)")
         ->capture_default_str();
     sub->add_option("--resolution", o->resolution, "Viewport: N or WxH pixels (1 to 16384 per side)")->capture_default_str();
     sub->add_option("--depth", o->depth, "Depth format: unorm bits 8..32 (e.g. 24, d16) or float")->capture_default_str();

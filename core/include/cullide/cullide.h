@@ -46,10 +46,20 @@ enum class CullMethod : uint8_t {
     // GREATER queries then LESS draws in the reverse pass. Self-intersections stay in the PCS;
     // contacts (equal depth) are lost, as the paper says.
     Modified,
+    // Never prunes an intersecting triangle (touching contacts and self-intersections included),
+    // at any resolution and depth format (docs/reliable.md). Needs a backend with conservative
+    // rasterization (DepthBackend::supportsConservative; the CPU reference). Works on the
+    // hierarchy's leaves (units): each unit is tested, in conservative interval mode, against
+    // every PCS unit that shares no vertex with it, by forward and reverse passes per class of a
+    // distance-2 colouring of the units; pairs inside a unit and between units that share a
+    // vertex are checked exactly instead. A unit is pruned when no conservative fragment of it
+    // conflicts (its depth interval is strictly in front of or strictly behind everything stored
+    // at that pixel) and no exactly checked pair may intersect.
+    Reliable,
 };
 
 const char* toString(CullMethod m);
-CullMethod parseCullMethod(const std::string& text);  // "original" | "modified"; InputError
+CullMethod parseCullMethod(const std::string& text);  // "original" | "modified" | "reliable"; InputError
 
 // Directions: the six axis directions +x, -x, +y, -y, +z, -z (the default).
 std::vector<Vec3d> axisDirections();
@@ -97,7 +107,9 @@ struct CullideResult {
     uint32_t levels = 0;           // hierarchy levels visited
 };
 
-// Computes the PCS of `scene` with `backend`. Throws InputError on bad options.
+// Computes the PCS of `scene` with `backend`. Throws InputError on bad options, and
+// InputError("option --method", ...) for the reliable method on a backend without conservative
+// rasterization.
 CullideResult runCullide(const Scene& scene, DepthBackend& backend, const CullideOptions& options);
 
 // A run of triangles [first, first + count) in a geometry's triangle list.
