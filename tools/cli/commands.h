@@ -19,5 +19,7 @@ void addMakeSceneCommand(CLI::App& app, Action& action);
 void addPruneCommand(CLI::App& app, Action& action);
 void addValidateCommand(CLI::App& app, Action& action);
 void addOracleCommand(CLI::App& app, Action& action);
+void addStudyCommand(CLI::App& app, Action& action);
+void addPlotCommand(CLI::App& app, Action& action);
 
 }  // namespace cullide::cli

@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
     cullide::cli::addPruneCommand(app, action);
     cullide::cli::addValidateCommand(app, action);
     cullide::cli::addOracleCommand(app, action);
+    cullide::cli::addStudyCommand(app, action);
+    cullide::cli::addPlotCommand(app, action);
 
     try {
         app.parse(argc, argv);

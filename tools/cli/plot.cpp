@@ -1,0 +1,70 @@
+// `cullide plot`: charts of study results, stability sweeps, `prune --json` pass statistics and
+// Google Benchmark JSON, drawn by tools/plot.py (matplotlib) with Debian's /usr/bin/python3.
+#include "commands.h"
+
+#include "cullide/error.h"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+namespace cullide::cli {
+namespace {
+
+struct PlotOptions {
+    std::vector<std::string> inputs;
+    std::string out = "figures";
+    std::string python;
+};
+
+// tools/plot.py: $CULLIDE_PLOT_SCRIPT, else beside the executable's source tree (compile-time
+// CULLIDE_SOURCE_DIR), else ../share/cullide/plot.py next to the executable.
+std::filesystem::path plotScript() {
+    if (const char* env = std::getenv("CULLIDE_PLOT_SCRIPT")) return env;
+    const std::filesystem::path source = std::filesystem::path(CULLIDE_SOURCE_DIR) / "tools" / "plot.py";
+    if (std::filesystem::exists(source)) return source;
+    std::error_code ec;
+    const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+    return exe.parent_path() / ".." / "share" / "cullide" / "plot.py";
+}
+
+int runPlot(const PlotOptions& o) {
+    const std::filesystem::path script = plotScript();
+    if (!std::filesystem::exists(script)) throw InputError("plot", "cannot find the plot script " + script.string());
+    for (const std::string& in : o.inputs)
+        if (!std::filesystem::exists(in)) throw InputError(in, "no such file");
+    std::string python = o.python;
+    if (python.empty()) python = std::getenv("CULLIDE_PYTHON") ? std::getenv("CULLIDE_PYTHON") : "/usr/bin/python3";
+    std::vector<std::string> args{python, script.string(), "-o", o.out};
+    args.insert(args.end(), o.inputs.begin(), o.inputs.end());
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    std::fflush(stdout);
+    const pid_t pid = fork();
+    if (pid < 0) throw InputError("plot", "cannot start " + python);
+    if (pid == 0) {
+        execv(argv[0], argv.data());
+        std::fprintf(stderr, "cullide: error: plot: cannot run %s (set CULLIDE_PYTHON to a python3 with matplotlib)\n", argv[0]);
+        _exit(2);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 2;
+}
+
+}  // namespace
+
+void addPlotCommand(CLI::App& app, Action& action) {
+    auto o = std::make_shared<PlotOptions>();
+    CLI::App* sub = app.add_subcommand(
+        "plot", "Charts (PNG and SVG) of study results, stability sweeps, prune --json or Google Benchmark JSON");
+    sub->add_option("inputs", o->inputs, "study .csv/.jsonl, stability .csv, prune --json .json, cullide_bench JSON")->required();
+    sub->add_option("-o,--out", o->out, "Folder for the charts")->capture_default_str();
+    sub->add_option("--python", o->python, "Python with matplotlib (default $CULLIDE_PYTHON or /usr/bin/python3)");
+    sub->callback([o, &action] { action = [o] { return runPlot(*o); }; });
+}
+
+}  // namespace cullide::cli

@@ -1,0 +1,172 @@
+// `cullide study`: precision studies (sweeps timed and measured against the oracle, false prunes
+// attributed to causes), their shards and merging, and the stability sweeps. The engine is in
+// tools/study/ (study.h, causes.h, probes.h); the rules are in docs/studies.md.
+#include "commands.h"
+#include "output.h"
+
+#include "cullide/error.h"
+#include "probes.h"
+#include "study.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+
+namespace cullide::cli {
+namespace {
+
+struct StudyCliOptions {
+    std::string spec;
+    std::string preset;
+    std::vector<std::string> scenes, methods, resolutions, depths, directions, hierarchies, backends;
+    std::vector<uint32_t> leafSizes;
+    std::vector<int> threads;
+    int repeats = 0;  // 0: the spec's
+    bool noOracle = false;
+    std::string shard;
+    std::string out = "study.csv";
+    bool quiet = false;
+    // Stability sweeps
+    std::string stability;
+    int trials = 0, resolution = 0;
+    uint64_t seed = 1;
+};
+
+struct MergeCliOptions {
+    std::vector<std::string> inputs;
+    std::string out;
+};
+
+study::Spec buildSpec(const StudyCliOptions& o) {
+    study::Spec s;
+    if (!o.preset.empty()) {
+        if (o.preset != "paper") throw InputError("option --preset", "'" + o.preset + "': the presets are: paper");
+        s = study::paperPreset(o.repeats > 0 ? o.repeats : 3);
+    }
+    if (!o.spec.empty()) s = study::loadSpec(o.spec);
+    if (!o.scenes.empty()) s.scenes = o.scenes;
+    if (!o.methods.empty()) s.methods = o.methods;
+    if (!o.resolutions.empty()) s.resolutions = o.resolutions;
+    if (!o.depths.empty()) s.depths = o.depths;
+    if (!o.directions.empty()) s.directions = o.directions;
+    if (!o.hierarchies.empty()) s.hierarchies = o.hierarchies;
+    if (!o.leafSizes.empty()) s.leafSizes = o.leafSizes;
+    if (!o.backends.empty()) s.backends = o.backends;
+    if (!o.threads.empty()) s.threads = o.threads;
+    if (o.repeats > 0) s.repeats = o.repeats;
+    if (o.noOracle) s.oracle = false;
+    if (s.scenes.empty()) throw InputError("study", "no scenes: give a SPEC file, --preset paper or --scenes");
+    return s;
+}
+
+int runStability(const StudyCliOptions& o) {
+    study::ProbeOptions p;
+    if (o.trials > 0) p.trials = o.trials;
+    if (o.resolution > 0) p.resolution = o.resolution;
+    p.seed = o.seed;
+    if (!o.methods.empty()) p.methods = o.methods;
+    if (!o.depths.empty()) p.depths = o.depths;
+    std::vector<nlohmann::ordered_json> rows;
+    if (o.stability == "penetration") {
+        rows = study::penetrationSweep(p, {0.1, 0.2, 0.3, 0.5, 0.7, 0.9, 1.0, 1.1, 1.5, 2, 3, 5, 10});
+    } else if (o.stability == "tilt") {
+        std::vector<double> angles;
+        for (double a = 0; a <= 80; a += 10) angles.push_back(a);
+        for (double a : {85.0, 88.0, 89.0, 89.5, 89.9, 90.0}) angles.push_back(a);
+        rows = study::tiltSweep(p, angles, o.directions.empty() ? std::vector<std::string>{"z", "axes", "14"} : o.directions);
+    } else if (o.stability == "overlap") {
+        if (o.depths.empty()) p.depths = {"24"};
+        rows = study::overlapSweep(p, {0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0});
+    } else if (o.stability == "jitter") {
+        if (o.resolution <= 0) p.resolution = 500;
+        if (o.trials <= 0) p.trials = 4;
+        if (o.depths.empty()) p.depths = {"24"};
+        rows = study::jitterSweep(p, o.scenes.empty() ? std::vector<std::string>{"bunny:5000", "cows:3000"} : o.scenes,
+                                  {1e-7, 1e-5, 1e-3, 1e-2});
+    } else {
+        throw InputError("option --stability", "'" + o.stability + "': penetration, tilt, overlap or jitter");
+    }
+    size_t unexplained = 0, detected = 0;
+    for (const auto& r : rows) unexplained += r["fp_unexplained"].get<size_t>(), detected += r["detected"].get<int>();
+    writeFileAtomically(o.out, study::rowsToCsv(rows));
+    std::printf("%s: %zu trials, %zu without false prunes; unexplained false prunes: %zu; wrote %s\n", o.stability.c_str(),
+                rows.size(), detected, unexplained, o.out.c_str());
+    return unexplained ? 1 : 0;
+}
+
+int runStudyCommand(const StudyCliOptions& o) {
+    if (!o.stability.empty()) return runStability(o);
+    study::StudyOptions so;
+    so.spec = buildSpec(o);
+    if (!o.shard.empty()) so.shard = study::parseShard(o.shard);
+    so.out = o.out;
+    so.progress = !o.quiet && isatty(2);
+    size_t unexplained = 0;
+    so.onRecord = [&](const nlohmann::ordered_json& r) {
+        if (!r["fp_unexplained"].is_null()) unexplained += r["fp_unexplained"].get<size_t>();
+        if (o.quiet) return;
+        std::string causes;
+        if (!r["false_prunes"].is_null())
+            causes = " false prunes " + r["false_prunes"].dump() + " (depth " + r["fp_depth_rounding"].dump() + ", sampling " +
+                     r["fp_sampling"].dump() + ", edge-on " + r["fp_edge_on"].dump() + ", untested " + r["fp_untested"].dump() +
+                     ", unexplained " + r["fp_unexplained"].dump() + ")";
+        std::printf("%s %s %s %s %s: %.1f ms, %s calls, PCS %s of %s;%s\n", r["scene"].get<std::string>().c_str(),
+                    r["method"].get<std::string>().c_str(), r["resolution"].get<std::string>().c_str(),
+                    r["depth"].get<std::string>().c_str(), r["directions"].get<std::string>().c_str(), r["time_ms"].get<double>(),
+                    r["calls"].dump().c_str(), r["pcs"].dump().c_str(), r["triangles"].dump().c_str(), causes.c_str());
+        std::fflush(stdout);
+    };
+    const size_t done = study::runStudy(so);
+    const study::OutputPaths paths = study::outputPaths(so.out);
+    std::printf("study: %zu run(s) done, results in %s and %s; unexplained false prunes: %zu\n", done,
+                paths.csv.string().c_str(), paths.jsonl.string().c_str(), unexplained);
+    return unexplained ? 1 : 0;
+}
+
+}  // namespace
+
+void addStudyCommand(CLI::App& app, Action& action) {
+    auto o = std::make_shared<StudyCliOptions>();
+    CLI::App* sub = app.add_subcommand(
+        "study", "Sweep configurations over scenes: time, PCS, false prunes by class and cause (docs/studies.md)");
+    sub->add_option("spec", o->spec, "Study spec (.json); command-line lists override its fields");
+    sub->add_option("--preset", o->preset, "paper: the seed paper's Section 6 (bunny 5k-270k, two cows 3k-270k, 500x500, D24, modified)");
+    sub->add_option("--scenes", o->scenes, "Scenes: bunny:N, cows:N, twist:N, cylinders:N[:C], or files (FILE@K: frame K)");
+    sub->add_option("--methods", o->methods, "Methods (as prune --method)");
+    sub->add_option("--resolutions", o->resolutions, "Viewports: N or WxH");
+    sub->add_option("--depths", o->depths, "Depth formats: 8..32 or float");
+    sub->add_option("--directions", o->directions, "Direction sets: axes, N, or a list (one set per argument)");
+    sub->add_option("--hierarchies", o->hierarchies, "connectivity | random");
+    sub->add_option("--leaf-sizes", o->leafSizes, "Hierarchy leaf sizes");
+    sub->add_option("--backends", o->backends, "cpu | gl");
+    sub->add_option("--threads", o->threads, "Worker threads per run (0: all cores)");
+    sub->add_option("--repeats", o->repeats, "Timed runs per configuration (median, min, max)")->check(CLI::Range(1, 1000));
+    sub->add_flag("--no-oracle", o->noOracle, "Time only: no oracle, no false prunes");
+    sub->add_option("--shard", o->shard, "Run only slice i of N (i/N, 0-based; e.g. $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT)");
+    sub->add_option("-o,--out", o->out, "Output .csv (JSON lines beside it as .jsonl); existing runs are skipped (resume)")
+        ->capture_default_str();
+    sub->add_flag("-q,--quiet", o->quiet, "No per-run lines and no progress bar");
+    sub->add_option("--stability", o->stability,
+                    "Run a stability sweep instead: penetration | tilt | overlap | jitter (CSV to --out)");
+    sub->add_option("--trials", o->trials, "Stability: trials per point")->check(CLI::Range(1, 100000));
+    sub->add_option("--resolution", o->resolution, "Stability: viewport side")->check(CLI::Range(1, 16384));
+    sub->add_option("--seed", o->seed, "Stability: random seed");
+    sub->callback([o, sub, &action] {
+        if (sub->get_subcommands().empty()) action = [o] { return runStudyCommand(*o); };
+    });
+
+    auto m = std::make_shared<MergeCliOptions>();
+    CLI::App* merge = sub->add_subcommand("merge", "Join study outputs (shards) into one, by run id, in sweep order");
+    merge->add_option("inputs", m->inputs, "Study outputs (.csv or .jsonl)")->required();
+    merge->add_option("-o,--out", m->out, "Merged output (.csv; .jsonl beside it)")->required();
+    merge->callback([m, &action] {
+        action = [m] {
+            std::vector<std::filesystem::path> in(m->inputs.begin(), m->inputs.end());
+            const size_t n = study::mergeOutputs(in, m->out);
+            std::printf("merged %zu run(s) from %zu file(s) into %s\n", n, in.size(), m->out.c_str());
+            return 0;
+        };
+    });
+}
+
+}  // namespace cullide::cli

@@ -1,0 +1,546 @@
+// The study engine: specs, the sweep, one run, resumable output, shards and merging (study.h).
+#include "causes.h"
+#include "study.h"
+
+#include "cullide/error.h"
+#include "cullide/generators.h"
+#include "cullide/mesh_io.h"
+#include "cullide/oracle/measures.h"
+#include "cullide/raster/cpu_backend.h"
+#include "cullide/raster/gl_backend.h"
+#include "cullide/scene_io.h"
+
+#include <tbb/task_arena.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace cullide::study {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+template <typename T>
+std::vector<T> listOf(const nlohmann::json& v, const std::string& source, const char* key) {
+    try {
+        if (v.is_array()) return v.get<std::vector<T>>();
+        return {v.get<T>()};
+    } catch (const nlohmann::json::exception&) {
+        throw InputError(source, std::string("field '") + key + "': expected a value or a list of values");
+    }
+}
+
+std::string dataDir() { return CULLIDE_DATA_DIR; }
+
+// "name:a:b" split at ':' (a Windows drive letter is not a concern here).
+std::vector<std::string> splitColon(const std::string& s) {
+    std::vector<std::string> out;
+    std::string cur;
+    for (char c : s) {
+        if (c == ':') out.push_back(cur), cur.clear();
+        else cur += c;
+    }
+    out.push_back(cur);
+    return out;
+}
+
+size_t parseCount(const std::string& text, const std::string& scene) {
+    char* end = nullptr;
+    const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
+    if (text.empty() || *end != 0 || v < 1 || v > 50'000'000)
+        throw InputError("scene '" + scene + "'", "'" + text + "' is not a count from 1 to 50,000,000");
+    return size_t(v);
+}
+
+bool isGenerated(const std::string& text) {
+    const std::string head = splitColon(text)[0];
+    return head == "bunny" || head == "cows" || head == "cylinders" || head == "twist";
+}
+
+// The file part of "path@K" and the frame selector ("" when none).
+std::pair<std::string, std::string> splitFrame(const std::string& text) {
+    const size_t at = text.rfind('@');
+    if (at == std::string::npos) return {text, ""};
+    return {text.substr(0, at), text.substr(at + 1)};
+}
+
+uint64_t fnv1a(const std::string& s) {
+    uint64_t h = 1469598103934665603ull;
+    for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
+    return h;
+}
+
+std::string csvField(const nlohmann::ordered_json& v) {
+    if (v.is_null()) return "";
+    if (v.is_string()) {
+        const std::string s = v.get<std::string>();
+        if (s.find_first_of(",\"\n") == std::string::npos) return s;
+        std::string q = "\"";
+        for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+        return q + "\"";
+    }
+    if (v.is_number_float()) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%.6g", v.get<double>());
+        return buf;
+    }
+    return v.dump();
+}
+
+}  // namespace
+
+Spec parseSpec(const nlohmann::json& j, const std::string& source) {
+    if (!j.is_object()) throw InputError(source, "a study spec is a JSON object");
+    Spec s;
+    for (const auto& [key, v] : j.items()) {
+        if (key == "scenes") s.scenes = listOf<std::string>(v, source, "scenes");
+        else if (key == "methods") s.methods = listOf<std::string>(v, source, "methods");
+        else if (key == "resolutions") {
+            s.resolutions.clear();
+            for (const auto& r : (v.is_array() ? v : nlohmann::json::array({v})))
+                s.resolutions.push_back(r.is_number_integer() ? std::to_string(r.get<int>()) : r.is_string() ? r.get<std::string>() : throw InputError(source, "field 'resolutions': N or \"WxH\""));
+        } else if (key == "depths") {
+            s.depths.clear();
+            for (const auto& r : (v.is_array() ? v : nlohmann::json::array({v})))
+                s.depths.push_back(r.is_number_integer() ? std::to_string(r.get<int>()) : r.is_string() ? r.get<std::string>() : throw InputError(source, "field 'depths': bits or a name"));
+        } else if (key == "directions") {
+            s.directions.clear();
+            for (const auto& r : (v.is_array() ? v : nlohmann::json::array({v})))
+                s.directions.push_back(r.is_number_integer() ? std::to_string(r.get<int>()) : r.is_string() ? r.get<std::string>() : throw InputError(source, "field 'directions': \"axes\", N or a list string"));
+        } else if (key == "hierarchies") s.hierarchies = listOf<std::string>(v, source, "hierarchies");
+        else if (key == "leaf_sizes") s.leafSizes = listOf<uint32_t>(v, source, "leaf_sizes");
+        else if (key == "backends") s.backends = listOf<std::string>(v, source, "backends");
+        else if (key == "threads") s.threads = listOf<int>(v, source, "threads");
+        else if (key == "branching") s.branching = listOf<uint32_t>(v, source, "branching").at(0);
+        else if (key == "seed") s.seed = listOf<uint64_t>(v, source, "seed").at(0);
+        else if (key == "repeats") s.repeats = listOf<int>(v, source, "repeats").at(0);
+        else if (key == "oracle") {
+            if (!v.is_boolean()) throw InputError(source, "field 'oracle': true or false");
+            s.oracle = v.get<bool>();
+        } else
+            throw InputError(source, "unknown field '" + key + "' (fields: scenes, methods, resolutions, depths, "
+                                     "directions, hierarchies, leaf_sizes, backends, threads, branching, seed, "
+                                     "repeats, oracle)");
+    }
+    return s;
+}
+
+Spec loadSpec(const std::string& path) {
+    std::ifstream f(path);
+    if (!f) throw InputError(path, "cannot open the study spec");
+    try {
+        return parseSpec(nlohmann::json::parse(f), path);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw InputError(path, std::string("not JSON: ") + e.what());
+    }
+}
+
+Spec paperPreset(int repeats) {
+    Spec s;
+    // Five sizes per scene over the paper's ranges (bunny 5k-270k, cows 3k-270k).
+    s.scenes = {"bunny:5000",  "bunny:20000", "bunny:70000", "bunny:150000", "bunny:270000",
+                "cows:3000",   "cows:20000",  "cows:70000",  "cows:150000",  "cows:270000"};
+    s.methods = {"modified"};
+    s.resolutions = {"500"};
+    s.depths = {"24"};
+    s.repeats = repeats;
+    return s;
+}
+
+std::string RunConfig::key() const {
+    std::ostringstream k;
+    k << scene << '|' << frame << '|' << method << '|' << resolution << '|' << depth << '|' << directions << '|'
+      << hierarchy << '|' << leafSize << '|' << branching << '|' << seed << '|' << backend << '|' << threads;
+    return k.str();
+}
+
+std::string RunConfig::id() const {
+    char buf[24];
+    std::snprintf(buf, sizeof buf, "%016llx", (unsigned long long)fnv1a(key()));
+    return buf;
+}
+
+size_t studyFrameCount(const std::string& text) {
+    if (isGenerated(text)) return 1;
+    return loadScene(splitFrame(text).first).frameCount();
+}
+
+Scene loadStudyScene(const std::string& text, uint32_t frame) {
+    if (isGenerated(text)) {
+        const std::vector<std::string> parts = splitColon(text);
+        if (parts.size() < 2 || parts.size() > 3 || (parts.size() == 3 && parts[0] != "cylinders"))
+            throw InputError("scene '" + text + "'", "expected bunny:N, cows:N, twist:N or cylinders:N[:C]");
+        SceneRequest r;
+        r.triangles = parseCount(parts[1], text);
+        if (parts[0] == "bunny") return makeDeformedBunny(loadMesh(dataDir() + "/meshes/bunny.off"), r).scene;
+        if (parts[0] == "cows") return makeTwoCows(loadMesh(dataDir() + "/meshes/cow.off"), r).scene;
+        if (parts[0] == "twist")
+            return makeTwistAnimation(resample(loadMesh(dataDir() + "/meshes/bunny.off"), r.triangles), r).scene;
+        return makeCylinders(parts.size() == 3 ? parseCount(parts[2], text) : 8, r).scene;
+    }
+    const Animation a = loadScene(splitFrame(text).first);
+    if (frame >= a.frameCount())
+        throw InputError("scene '" + text + "'", "has " + std::to_string(a.frameCount()) + " frame(s), no frame " +
+                                                     std::to_string(frame));
+    return a.sceneAt(frame);
+}
+
+std::vector<RunConfig> expand(const Spec& spec) {
+    if (spec.scenes.empty()) throw InputError("study spec", "no scenes");
+    if (spec.repeats < 1 || spec.repeats > 1000) throw InputError("study spec", "repeats must be 1 to 1000");
+    auto nonEmpty = [](const auto& v, const char* what) {
+        if (v.empty()) throw InputError("study spec", std::string("no ") + what);
+    };
+    nonEmpty(spec.methods, "methods"), nonEmpty(spec.resolutions, "resolutions"), nonEmpty(spec.depths, "depths");
+    nonEmpty(spec.directions, "directions"), nonEmpty(spec.hierarchies, "hierarchies");
+    nonEmpty(spec.leafSizes, "leaf sizes"), nonEmpty(spec.backends, "backends"), nonEmpty(spec.threads, "threads");
+    for (const std::string& b : spec.backends)
+        if (b != "cpu" && b != "gl") throw InputError("study spec", "backend '" + b + "': cpu or gl");
+    for (int t : spec.threads)
+        if (t < 0 || t > 1024) throw InputError("study spec", "threads must be 0 (all) to 1024");
+    std::vector<RunConfig> out;
+    for (const std::string& scene : spec.scenes) {
+        std::vector<uint32_t> frames;
+        if (isGenerated(scene)) {
+            frames = {0};
+        } else {
+            const auto [file, sel] = splitFrame(scene);
+            const size_t count = studyFrameCount(scene);
+            if (sel.empty() || sel == "all") {
+                for (uint32_t f = 0; f < count; ++f) frames.push_back(f);
+            } else {
+                if (sel.find_first_not_of("0123456789") != std::string::npos || sel.size() > 9 ||
+                    std::stoul(sel) >= count)
+                    throw InputError("scene '" + scene + "'", "frame '" + sel + "': the file has " + std::to_string(count) + " frame(s)");
+                frames = {uint32_t(std::stoul(sel))};
+            }
+        }
+        for (uint32_t frame : frames)
+            for (const auto& m : spec.methods)
+                for (const auto& r : spec.resolutions)
+                    for (const auto& d : spec.depths)
+                        for (const auto& dir : spec.directions)
+                            for (const auto& h : spec.hierarchies)
+                                for (uint32_t leaf : spec.leafSizes)
+                                    for (const auto& b : spec.backends)
+                                        for (int t : spec.threads) {
+                                            RunConfig c;
+                                            c.index = out.size();
+                                            c.scene = scene, c.frame = frame, c.method = m, c.resolution = r;
+                                            c.depth = d, c.directions = dir, c.hierarchy = h, c.leafSize = leaf;
+                                            c.branching = spec.branching, c.seed = spec.seed, c.backend = b;
+                                            c.threads = t;
+                                            out.push_back(c);
+                                        }
+    }
+    for (const RunConfig& c : out) (void)cullideOptions(c);  // every value checked before any run
+    return out;
+}
+
+Shard parseShard(const std::string& text) {
+    Shard s;
+    unsigned long long i = 0, n = 0;
+    char slash = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%llu%c%llu%c", &i, &slash, &n, &extra) != 3 || slash != '/' || n < 1 || i >= n ||
+        n > 1'000'000)
+        throw InputError("option --shard", "'" + text + "': expected i/N with 0 <= i < N (e.g. 0/4)");
+    s.index = size_t(i), s.count = size_t(n);
+    return s;
+}
+
+std::vector<RunConfig> slice(const std::vector<RunConfig>& all, const Shard& shard) {
+    const size_t begin = all.size() * shard.index / shard.count, end = all.size() * (shard.index + 1) / shard.count;
+    return {all.begin() + ptrdiff_t(begin), all.begin() + ptrdiff_t(end)};
+}
+
+std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads) {
+    if (name == "cpu") {
+        raster::CpuBackendOptions o;
+        o.threads = threads;
+        return raster::makeCpuBackend(o);
+    }
+    if (name == "gl") return raster::makeGlBackend();
+    throw InputError("backend", "'" + name + "': cpu or gl");
+}
+
+CullideOptions cullideOptions(const RunConfig& c) {
+    CullideOptions o;
+    o.method = parseCullMethod(c.method);
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(c.resolution.c_str(), "%d%c%d%c", &w, &x, &h, &extra) == 3 && (x == 'x' || x == 'X')) {
+    } else if (std::sscanf(c.resolution.c_str(), "%d%c", &w, &extra) == 1) {
+        h = w;
+    } else {
+        throw InputError("resolution", "'" + c.resolution + "': expected N or WxH");
+    }
+    o.width = w, o.height = h;
+    o.depth = DepthFormat::parse(c.depth);
+    o.directions = parseDirections(c.directions);
+    o.hierarchy.kind = parseHierarchyKind(c.hierarchy);
+    o.hierarchy.leafSize = c.leafSize;
+    o.hierarchy.branching = c.branching;
+    o.hierarchy.seed = c.seed;
+    o.validate();
+    return o;
+}
+
+nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const oracle::Truth* truth, int repeats,
+                              DepthBackend& backend) {
+    const CullideOptions options = cullideOptions(c);
+    std::unique_ptr<tbb::task_arena> arena =
+        c.threads > 0 ? std::make_unique<tbb::task_arena>(c.threads) : std::make_unique<tbb::task_arena>();
+    std::vector<std::pair<double, CullideResult>> timed;
+    for (int k = 0; k < repeats; ++k) {
+        arena->execute([&] {
+            const auto start = Clock::now();
+            CullideResult r = runCullide(scene, backend, options);
+            timed.emplace_back(secondsSince(start), std::move(r));
+        });
+    }
+    std::vector<size_t> order(timed.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return timed[a].first < timed[b].first; });
+    const auto& [median, r] = timed[order[order.size() / 2]];
+    size_t rendered = 0, queries = 0;
+    for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
+
+    nlohmann::ordered_json j;
+    j["index"] = c.index;
+    j["id"] = c.id();
+    j["scene"] = c.scene;
+    j["frame"] = c.frame;
+    j["triangles"] = scene.triangleCount();
+    j["objects"] = scene.objects.size();
+    j["method"] = c.method;
+    j["resolution"] = c.resolution;
+    j["depth"] = options.depth.name();
+    j["directions"] = c.directions;
+    j["direction_count"] = options.directions.size();
+    j["hierarchy"] = c.hierarchy;
+    j["leaf_size"] = c.leafSize;
+    j["branching"] = c.branching;
+    j["backend"] = c.backend;
+    j["threads"] = c.threads;
+    j["repeats"] = repeats;
+    j["time_ms"] = 1e3 * median;
+    j["time_min_ms"] = 1e3 * timed[order.front()].first;
+    j["time_max_ms"] = 1e3 * timed[order.back()].first;
+    j["hierarchy_ms"] = 1e3 * r.hierarchySeconds;
+    j["calls"] = r.passes.size();
+    j["levels"] = r.levels;
+    j["triangles_rendered"] = rendered;
+    j["queries"] = queries;
+    j["pcs"] = r.pcs.size();
+    for (const char* k : {"oracle_pairs", "oracle_crossing", "oracle_touching", "colliding", "false_prunes",
+                          "fp_crossing", "fp_touching", "fp_depth_rounding", "fp_sampling", "fp_edge_on",
+                          "fp_untested", "fp_unexplained", "missed_pairs", "mp_crossing", "mp_touching",
+                          "mp_depth_rounding", "mp_sampling", "mp_edge_on", "mp_untested", "mp_unexplained",
+                          "false_positives", "efficiency", "attribution_ms"})
+        j[k] = nullptr;
+    if (truth) {
+        const oracle::PcsReport rep = oracle::measurePcs(scene, *truth, r.pcs, options);
+        const auto start = Clock::now();
+        Attribution a;
+        arena->execute([&] { a = attributeFalsePrunes(scene, *truth, backend, options); });
+        j["attribution_ms"] = 1e3 * secondsSince(start);
+        // The instrumented run must be the run that was timed (determinism): otherwise every
+        // false prune is unexplained.
+        const bool same = a.result.pcs == r.pcs;
+        const size_t missed = rep.missedPairs[0] + rep.missedPairs[1];
+        size_t attributedPairs = 0, attributedTriangles = 0;
+        for (int k = 0; k < kCauseCount; ++k) attributedPairs += a.pairs[size_t(k)], attributedTriangles += a.triangles[size_t(k)];
+        if (!same || attributedPairs != missed || attributedTriangles != rep.falsePruneCount()) {
+            a.pairs = {}, a.triangles = {};
+            a.pairs[size_t(Cause::Unexplained)] = missed;
+            a.triangles[size_t(Cause::Unexplained)] = rep.falsePruneCount();
+        }
+        j["oracle_pairs"] = truth->pairs.size();
+        j["oracle_crossing"] = truth->count(oracle::PairClass::Crossing);
+        j["oracle_touching"] = truth->count(oracle::PairClass::Touching);
+        j["colliding"] = rep.collidingTriangles;
+        j["false_prunes"] = rep.falsePruneCount();
+        j["fp_crossing"] = rep.falsePrunes[0];
+        j["fp_touching"] = rep.falsePrunes[1];
+        j["missed_pairs"] = missed;
+        j["mp_crossing"] = rep.missedPairs[0];
+        j["mp_touching"] = rep.missedPairs[1];
+        for (int k = 0; k < kCauseCount; ++k) {
+            j[std::string("fp_") + toString(Cause(k))] = a.triangles[size_t(k)];
+            j[std::string("mp_") + toString(Cause(k))] = a.pairs[size_t(k)];
+        }
+        j["false_positives"] = rep.falsePositives;
+        j["efficiency"] = rep.efficiency;
+    }
+    j["backend_description"] = backend.describe();
+    nlohmann::ordered_json passes = nlohmann::ordered_json::array();
+    for (const PassStats& p : r.passes)
+        passes.push_back({{"level", p.level}, {"direction", p.direction}, {"nodes_in", p.nodesIn},
+                          {"nodes_out", p.nodesOut}, {"triangles_in", p.trianglesIn},
+                          {"triangles_out", p.trianglesOut}, {"triangles_rendered", p.trianglesRendered},
+                          {"queries", p.queries}, {"seconds", p.seconds}});
+    j["passes"] = passes;
+    return j;
+}
+
+const std::vector<std::string>& columns() {
+    static const std::vector<std::string> c = {
+        "index", "id", "scene", "frame", "triangles", "objects", "method", "resolution", "depth", "directions",
+        "direction_count", "hierarchy", "leaf_size", "branching", "backend", "threads", "repeats", "time_ms",
+        "time_min_ms", "time_max_ms", "hierarchy_ms", "calls", "levels", "triangles_rendered", "queries", "pcs",
+        "oracle_pairs", "oracle_crossing", "oracle_touching", "colliding", "false_prunes", "fp_crossing",
+        "fp_touching", "fp_depth_rounding", "fp_sampling", "fp_edge_on", "fp_untested", "fp_unexplained",
+        "missed_pairs", "mp_crossing", "mp_touching", "mp_depth_rounding", "mp_sampling", "mp_edge_on",
+        "mp_untested", "mp_unexplained", "false_positives", "efficiency", "attribution_ms"};
+    return c;
+}
+
+bool isTimingColumn(const std::string& name) { return name.size() > 3 && name.compare(name.size() - 3, 3, "_ms") == 0; }
+
+std::string csvHeader() {
+    std::string s;
+    for (const std::string& c : columns()) s += (s.empty() ? "" : ",") + c;
+    return s + "\n";
+}
+
+std::string csvRow(const nlohmann::ordered_json& record) {
+    std::string s;
+    bool first = true;
+    for (const std::string& c : columns()) {
+        s += first ? "" : ",";
+        first = false;
+        if (record.contains(c)) s += csvField(record[c]);
+    }
+    return s + "\n";
+}
+
+OutputPaths outputPaths(const std::filesystem::path& path) {
+    OutputPaths p;
+    const std::string ext = path.extension().string();
+    if (ext != ".csv" && ext != ".jsonl")
+        throw InputError(path.string(), "a study output ends in .csv or .jsonl (both are written)");
+    p.csv = std::filesystem::path(path).replace_extension(".csv");
+    p.jsonl = std::filesystem::path(path).replace_extension(".jsonl");
+    return p;
+}
+
+std::vector<nlohmann::ordered_json> readRecords(const std::filesystem::path& path) {
+    const OutputPaths p = outputPaths(path);
+    std::ifstream f(p.jsonl);
+    if (!f) throw InputError(p.jsonl.string(), "cannot open the study records (JSON lines)");
+    std::vector<nlohmann::ordered_json> out;
+    std::string line;
+    while (std::getline(f, line)) {
+        if (f.eof() && !line.empty() && line.back() != '}') break;  // a line cut by a killed run
+        try {
+            nlohmann::ordered_json j = nlohmann::ordered_json::parse(line);
+            if (j.is_object() && j.contains("id")) out.push_back(std::move(j));
+        } catch (const nlohmann::json::exception&) {
+        }
+    }
+    return out;
+}
+
+namespace {
+
+void writeAll(const OutputPaths& p, const std::vector<nlohmann::ordered_json>& records) {
+    std::string csv = csvHeader(), jsonl;
+    for (const auto& r : records) csv += csvRow(r), jsonl += r.dump() + "\n";
+    for (const auto& [path, bytes] : {std::pair{p.csv, csv}, std::pair{p.jsonl, jsonl}}) {
+        const std::filesystem::path tmp = std::filesystem::path(path).concat(".tmp");
+        {
+            std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+            f << bytes;
+            if (!f) throw InputError(path.string(), "cannot write");
+        }
+        std::error_code ec;
+        std::filesystem::rename(tmp, path, ec);
+        if (ec) throw InputError(path.string(), "cannot write: " + ec.message());
+    }
+}
+
+std::string duration(double s) {
+    char buf[32];
+    if (s < 60) std::snprintf(buf, sizeof buf, "%.0fs", s);
+    else if (s < 3600) std::snprintf(buf, sizeof buf, "%dm%02ds", int(s / 60), int(s) % 60);
+    else std::snprintf(buf, sizeof buf, "%dh%02dm", int(s / 3600), int(s / 60) % 60);
+    return buf;
+}
+
+}  // namespace
+
+size_t runStudy(const StudyOptions& opt) {
+    const OutputPaths paths = outputPaths(opt.out);
+    const std::vector<RunConfig> mine = slice(expand(opt.spec), opt.shard);
+
+    // Resume: keep the complete records already there (rewritten, so a cut line is healed).
+    std::vector<nlohmann::ordered_json> records;
+    std::set<std::string> done;
+    if (std::filesystem::exists(paths.jsonl)) {
+        records = readRecords(paths.jsonl);
+        for (const auto& r : records) done.insert(r["id"].get<std::string>());
+    }
+    writeAll(paths, records);
+    std::vector<RunConfig> todo;
+    for (const RunConfig& c : mine)
+        if (!done.count(c.id())) todo.push_back(c);
+
+    std::ofstream csv(paths.csv, std::ios::app), jsonl(paths.jsonl, std::ios::app);
+    if (!csv || !jsonl) throw InputError(paths.csv.string(), "cannot append to the study output");
+
+    std::string sceneKey;
+    Scene scene;
+    std::unique_ptr<oracle::Truth> truth;
+    std::map<std::pair<std::string, int>, std::unique_ptr<DepthBackend>> backends;
+    const auto start = Clock::now();
+    for (size_t i = 0; i < todo.size(); ++i) {
+        const RunConfig& c = todo[i];
+        const std::string key = c.scene + "@" + std::to_string(c.frame);
+        if (key != sceneKey) {  // the sweep is scene-major: one scene and one oracle at a time
+            scene = loadStudyScene(c.scene, c.frame);
+            truth.reset();
+            if (opt.spec.oracle) truth = std::make_unique<oracle::Truth>(oracle::findIntersections(scene));
+            sceneKey = key;
+        }
+        auto& backend = backends[{c.backend, c.threads}];
+        if (!backend) backend = makeBackend(c.backend, c.threads);
+        const nlohmann::ordered_json r = runOne(c, scene, truth.get(), opt.spec.repeats, *backend);
+        csv << csvRow(r) << std::flush;
+        jsonl << r.dump() << "\n" << std::flush;
+        if (opt.onRecord) opt.onRecord(r);
+        if (opt.progress) {
+            const double elapsed = secondsSince(start);
+            const double eta = elapsed / double(i + 1) * double(todo.size() - i - 1);
+            const int width = 30, filled = int(double(width) * double(i + 1) / double(todo.size()));
+            std::fprintf(stderr, "\rstudy [%s%s] %zu/%zu runs, %s elapsed, ETA %s   ", std::string(size_t(filled), '#').c_str(),
+                         std::string(size_t(width - filled), '.').c_str(), i + 1, todo.size(), duration(elapsed).c_str(),
+                         duration(eta).c_str());
+            if (i + 1 == todo.size()) std::fprintf(stderr, "\n");
+        }
+    }
+    return todo.size();
+}
+
+size_t mergeOutputs(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& out) {
+    std::map<std::string, nlohmann::ordered_json> byId;
+    for (const auto& in : inputs)
+        for (auto& r : readRecords(in)) byId.emplace(r["id"].get<std::string>(), std::move(r));
+    std::vector<nlohmann::ordered_json> records;
+    for (auto& [id, r] : byId) records.push_back(std::move(r));
+    std::stable_sort(records.begin(), records.end(), [](const auto& a, const auto& b) {
+        return a["index"].template get<size_t>() < b["index"].template get<size_t>();
+    });
+    writeAll(outputPaths(out), records);
+    return records.size();
+}
+
+}  // namespace cullide::study

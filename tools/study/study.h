@@ -1,0 +1,135 @@
+// Precision studies: sweeps of Cullide configurations over scenes, each run timed and measured
+// against the exact oracle, its false prunes attributed to causes (causes.h).
+//
+// Conventions
+//   - A Spec lists values per axis; the sweep is their product, in a fixed order: scene (and
+//     frame) outermost, then method, resolution, depth, directions, hierarchy, leaf size, backend,
+//     threads. RunConfig::index is the position in that order.
+//   - A run's id is a 16-hex-digit FNV-1a hash of its canonical key (every axis value, as given,
+//     plus branching and seed): stable across processes, shards and machines; resuming and merging
+//     key on it. Repeats are not part of the key.
+//   - Scenes: "bunny:N" (the deformed bunny, make-scene bunny), "cows:N" (two cows), "cylinders:N"
+//     or "cylinders:N:C", "twist:N" (a twisted bunny); or a scene/mesh file; "@K" picks frame K
+//     of a file's animation, "@all" (the default for files) every frame.
+//   - Records are flat JSON objects (plus a "passes" array of per-call stats); the CSV holds the
+//     flat columns of kColumns, in that order. Columns ending in "_ms" (and the passes' seconds)
+//     are timings: everything else is a pure function of the configuration.
+//   - Errors: InputError naming the spec field, option or file.
+#pragma once
+
+#include "cullide/cullide.h"
+#include "cullide/depth_backend.h"
+#include "cullide/oracle/oracle.h"
+#include "cullide/scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace cullide::study {
+
+struct Spec {
+    std::vector<std::string> scenes;
+    std::vector<std::string> methods{"modified"};
+    std::vector<std::string> resolutions{"500"};
+    std::vector<std::string> depths{"24"};
+    std::vector<std::string> directions{"axes"};
+    std::vector<std::string> hierarchies{"connectivity"};
+    std::vector<uint32_t> leafSizes{16};
+    std::vector<std::string> backends{"cpu"};
+    std::vector<int> threads{0};
+    uint32_t branching = 4;
+    uint64_t seed = 1;
+    int repeats = 3;      // timed runs per configuration (median, min, max)
+    bool oracle = true;   // measure against the oracle and attribute causes
+};
+
+// Reads a JSON spec: {"scenes": [...], "methods": [...], "resolutions": [...], "depths": [...],
+// "directions": [...], "hierarchies": [...], "leaf_sizes": [...], "backends": [...],
+// "threads": [...], "branching": B, "seed": S, "repeats": K, "oracle": true}. Scalars are accepted
+// where lists are expected. Unknown keys and bad values: InputError(source, ...).
+Spec parseSpec(const nlohmann::json& j, const std::string& source);
+Spec loadSpec(const std::string& path);
+// The paper's Section 6 experiments: bunny 5k..270k and two cows 3k..270k, 500x500, D24,
+// modified, axes, connectivity leaf 16; `repeats` timed runs each.
+Spec paperPreset(int repeats = 3);
+
+struct RunConfig {
+    size_t index = 0;
+    std::string scene;
+    uint32_t frame = 0;
+    std::string method, resolution, depth, directions, hierarchy;
+    uint32_t leafSize = 16, branching = 4;
+    uint64_t seed = 1;
+    std::string backend;
+    int threads = 0;
+
+    std::string key() const;
+    std::string id() const;
+};
+
+// The product of the spec's axes (validates every value first: InputError). File scenes are
+// opened to count their frames.
+std::vector<RunConfig> expand(const Spec& spec);
+
+// "i/N" with 0 <= i < N: the i-th of N contiguous slices of the sweep (scene-major, so a slice
+// computes few oracles). Slices are disjoint and cover the sweep.
+struct Shard {
+    size_t index = 0, count = 1;
+};
+Shard parseShard(const std::string& text);  // InputError("option --shard", ...)
+std::vector<RunConfig> slice(const std::vector<RunConfig>& all, const Shard& shard);
+
+// Backends by name, as `cullide prune --backend` makes them: "cpu" (the reference, `threads`
+// workers, 0 = all) or "gl" (throws InputError when no GL context can be made).
+std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads);
+
+// The scene of a scene string (see the conventions) at one frame, and its frame count.
+Scene loadStudyScene(const std::string& text, uint32_t frame);
+size_t studyFrameCount(const std::string& text);
+
+// Options of a configuration (throws InputError on bad values).
+CullideOptions cullideOptions(const RunConfig& c);
+
+// Runs one configuration: `repeats` timed runs, then (with the oracle) one instrumented run for
+// the causes. `truth` may be null when the oracle is off (the measures are then null). Returns
+// the record; `backend` is the configuration's backend.
+nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const oracle::Truth* truth, int repeats,
+                              DepthBackend& backend);
+
+// Column names of the CSV, in order.
+const std::vector<std::string>& columns();
+bool isTimingColumn(const std::string& name);
+std::string csvHeader();
+std::string csvRow(const nlohmann::ordered_json& record);
+
+// Output: `path` ending in .csv (JSON lines beside it, same stem, .jsonl) or .jsonl (CSV beside).
+struct OutputPaths {
+    std::filesystem::path csv, jsonl;
+};
+OutputPaths outputPaths(const std::filesystem::path& path);
+// Reads the records of a study output (.csv or .jsonl; the .jsonl is read). Incomplete lines
+// (a run killed mid-write) are skipped. InputError on unreadable files.
+std::vector<nlohmann::ordered_json> readRecords(const std::filesystem::path& path);
+
+struct StudyOptions {
+    Spec spec;
+    Shard shard;
+    std::filesystem::path out;  // .csv or .jsonl
+    bool progress = false;      // progress bar with ETA on stderr
+    std::function<void(const nlohmann::ordered_json&)> onRecord;  // after each run
+};
+// Runs the sweep (or its shard), appending to the output; runs whose id is already in the
+// output are skipped (resume). Returns the number of runs done now.
+size_t runStudy(const StudyOptions& options);
+
+// Joins study outputs (shards) into `out`: records deduplicated by id, sorted by index.
+// Returns the number of records.
+size_t mergeOutputs(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& out);
+
+}  // namespace cullide::study
