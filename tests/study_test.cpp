@@ -11,7 +11,10 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -265,6 +268,43 @@ TEST(StudyStability, JitterKeepsEveryFalsePruneExplained) {
         else EXPECT_EQ(r["false_prunes"], r["fp_untested"]) << r;
         if (r["kind"] == "perturb" && r["magnitude"].get<double>() == 1e-7) EXPECT_GT(r["oracle_pairs"].get<size_t>(), 0u);
     }
+}
+
+// `cullide study`, `study merge` and `plot` as a user runs them (status, files written).
+int runCli(const std::string& args, std::string* output = nullptr) {
+    FILE* p = popen((std::string(CULLIDE_CLI_PATH) + " " + args + " 2>&1").c_str(), "r");
+    if (!p) return -1;
+    char buf[4096];
+    std::string out;
+    for (size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
+    const int st = pclose(p);
+    if (output) *output = out;
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+// Trap: CLI11 would take "merge" for the optional SPEC positional if the subcommand were not
+// matched first; and a bad shard must be refused by name before any run starts.
+TEST(StudyCli, StudyMergeAndPlotFromTheCommandLine) {
+    test::TempDir dir;
+    const std::string common = " --scenes cows:600 --methods original modified --resolutions 64 --repeats 1 -q";
+    std::string out;
+    EXPECT_EQ(runCli("study" + common + " --shard 2/2 -o " + (dir / "x.csv").string(), &out), 2);
+    EXPECT_NE(out.find("--shard"), std::string::npos) << out;
+    EXPECT_EQ(runCli("study" + common + " --shard 0/2 -o " + (dir / "a.csv").string(), &out), 0) << out;
+    EXPECT_EQ(runCli("study" + common + " --shard 1/2 -o " + (dir / "b.csv").string(), &out), 0) << out;
+    EXPECT_EQ(runCli("study merge " + (dir / "a.csv").string() + " " + (dir / "b.jsonl").string() + " -o " +
+                     (dir / "m.csv").string(), &out), 0) << out;
+    EXPECT_EQ(readRecords(dir / "m.csv").size(), 2u);
+    if (std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") != 0) GTEST_SKIP() << "no matplotlib";
+    {
+        std::ofstream bench(dir / "bench.json");
+        bench << R"({"benchmarks": [{"name": "BM_Prune/scene:0/tris:5000", "run_type": "iteration", "real_time": 20.0, "time_unit": "ms"},
+                                   {"name": "BM_Prune/scene:0/tris:270000", "run_type": "iteration", "real_time": 600.0, "time_unit": "ms"}]})";
+    }
+    EXPECT_EQ(runCli("plot " + (dir / "m.csv").string() + " " + (dir / "bench.json").string() + " -o " + (dir / "fig").string(), &out), 0) << out;
+    EXPECT_TRUE(fs::exists(dir / "fig" / "speed_vs_accuracy.png")) << out;
+    EXPECT_TRUE(fs::exists(dir / "fig" / "figure8_time_vs_triangles.svg")) << out;
+    EXPECT_TRUE(fs::exists(dir / "fig" / "bench_bench_vs_triangles.png")) << out;
 }
 
 }  // namespace
