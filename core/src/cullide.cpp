@@ -3,9 +3,9 @@
 #include "cullide/cullide.h"
 
 #include "cullide/error.h"
+#include "cullide/parallel.h"
 #include "reliable.h"
 
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
@@ -199,7 +199,7 @@ private:
         const auto start = Clock::now();
         std::vector<Mesh> world(n);
         hierarchies_.resize(n);
-        tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        parallelForEach(0, n, [&](size_t i) {
             world[i] = scene_.worldMesh(i);
             hierarchies_[i] = buildHierarchy(world[i], opt_.hierarchy);
         });

@@ -10,9 +10,10 @@
 //     vertices, which the oracle follows (and mayIntersect mirrors).
 #include "reliable.h"
 
+#include "cullide/parallel.h"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/intersections.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 
@@ -135,7 +136,7 @@ bool mayIntersect(std::span<const Vec3f> positions, const Triangle& a, const Tri
 std::vector<uint8_t> exactHits(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
                                std::span<const TriangleRange> units, const UnitGraph& g) {
     std::vector<uint8_t> hit(units.size(), 0);
-    tbb::parallel_for(size_t(0), units.size(), [&](size_t u) {
+    parallelForEach(0, units.size(), [&](size_t u) {
         const TriangleRange& r = units[u];
         std::vector<uint32_t> partners;  // triangles of u and of its neighbours
         for (uint32_t t = r.first; t < r.first + r.count; ++t) partners.push_back(t);

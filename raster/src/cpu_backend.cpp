@@ -25,6 +25,8 @@
 // and the counts do not depend on scheduling.
 #include "cullide/raster/cpu_backend.h"
 
+#include "cullide/parallel.h"
+
 #include "conservative.h"
 #include "cullide/error.h"
 #include "reference_path.h"
@@ -89,31 +91,10 @@ struct alignas(64) TileOut {
     uint64_t fragments = 0, passed = 0;
 };
 
-// Every parallel loop of the backend: one phase, whose tasks touch disjoint data; phases follow
-// each other. Under ThreadSanitizer the joins inside libtbb.so (not instrumented) are invisible,
-// so each phase is annotated: the caller's history happens-before every task of the phase, and
-// every task happens-before the caller's continuation. Tasks of one phase are NOT ordered with
-// each other, so races inside a phase are still reported.
-#if defined(__SANITIZE_THREAD__)
-extern "C" void __tsan_acquire(void* addr);
-extern "C" void __tsan_release(void* addr);
-template <typename Body>
-void parallelFor(size_t begin, size_t end, size_t grain, const Body& body) {
-    static char before, after;  // sync objects (only their addresses matter)
-    __tsan_release(&before);
-    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, grain), [&](const tbb::blocked_range<size_t>& r) {
-        __tsan_acquire(&before);
-        body(r);
-        __tsan_release(&after);
-    });
-    __tsan_acquire(&after);
-}
-#else
-template <typename Body>
-void parallelFor(size_t begin, size_t end, size_t grain, const Body& body) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, grain), body);
-}
-#endif
+// Every parallel loop of the backend is one phase whose tasks touch disjoint data; phases
+// follow each other. cullide::parallelFor (cullide/parallel.h) annotates the joins for
+// ThreadSanitizer.
+using cullide::parallelFor;
 
 // The hot loop: one record clipped to a pixel rectangle (inclusive bounds).
 template <DepthFunc F, bool Float>
@@ -751,21 +732,10 @@ private:
         return results;
     }
 
-    // arena_.execute(f), with the hand-over annotated for ThreadSanitizer (see parallelFor).
+    // arena_.execute(f), with the hand-over annotated for ThreadSanitizer (cullide/parallel.h).
     template <typename F>
     void inArena(const F& f) {
-#if defined(__SANITIZE_THREAD__)
-        static char before, after;
-        __tsan_release(&before);
-        arena_.execute([&] {
-            __tsan_acquire(&before);
-            f();
-            __tsan_release(&after);
-        });
-        __tsan_acquire(&after);
-#else
-        arena_.execute(f);
-#endif
+        executeIn(arena_, f);
     }
 
     CpuBackendOptions options_;
