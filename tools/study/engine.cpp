@@ -1,4 +1,5 @@
 // The study engine: specs, the sweep, one run, resumable output, shards and merging (study.h).
+#include "cullide/parallel.h"
 #include "causes.h"
 #include "study.h"
 
@@ -301,7 +302,7 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
         c.threads > 0 ? std::make_unique<tbb::task_arena>(c.threads) : std::make_unique<tbb::task_arena>();
     std::vector<std::pair<double, CullideResult>> timed;
     for (int k = 0; k < repeats; ++k) {
-        arena->execute([&] {
+        executeIn(*arena, [&] {
             const auto start = Clock::now();
             CullideResult r = runCullide(scene, backend, options);
             timed.emplace_back(secondsSince(start), std::move(r));
@@ -351,7 +352,7 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
         const oracle::PcsReport rep = oracle::measurePcs(scene, *truth, r.pcs, options);
         const auto start = Clock::now();
         Attribution a;
-        arena->execute([&] { a = attributeFalsePrunes(scene, *truth, backend, options); });
+        executeIn(*arena, [&] { a = attributeFalsePrunes(scene, *truth, backend, options); });
         j["attribution_ms"] = 1e3 * secondsSince(start);
         // The instrumented run must be the run that was timed (determinism): otherwise every
         // false prune is unexplained.
