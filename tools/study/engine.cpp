@@ -1,5 +1,4 @@
 // The study engine: specs, the sweep, one run, resumable output, shards and merging (study.h).
-#include "cullide/parallel.h"
 #include "causes.h"
 #include "study.h"
 
@@ -7,6 +6,7 @@
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
 #include "cullide/oracle/measures.h"
+#include "cullide/parallel.h"
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/raster/gl_backend.h"
 #include "cullide/scene_io.h"
