@@ -80,11 +80,23 @@ void BM_Oracle(benchmark::State& state) {
     size_t pairs = 0;
     if (impl == 0) {
         const Scene scene = sceneOf(mesh);
+        double phase[5] = {0, 0, 0, 0, 0};
+        size_t candidates = 0;
         for (auto _ : state) {
             const oracle::Truth t = oracle::findIntersections(scene);
             pairs = t.pairs.size() + t.degenerate.size();
+            candidates = t.candidatePairs;
+            phase[0] += t.setupSeconds, phase[1] += t.buildSeconds, phase[2] += t.collideSeconds;
+            phase[3] += t.sortSeconds;
             benchmark::DoNotOptimize(t.pairs.data());
         }
+        // Phase times (ms per iteration) and the broad phase's candidate count.
+        const double it = double(state.iterations()) / 1000.0;
+        state.counters["setup_ms"] = phase[0] / it;
+        state.counters["build_ms"] = phase[1] / it;
+        state.counters["collide_ms"] = phase[2] / it;
+        state.counters["sort_ms"] = phase[3] / it;
+        state.counters["candidates"] = double(candidates);
     } else {
         const oracle::CgalSelfIntersections cgal(mesh, "bench mesh");
         for (auto _ : state) {

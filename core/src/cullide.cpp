@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <sstream>
 
@@ -55,6 +56,21 @@ std::vector<Vec3d> spreadDirections(uint32_t n) {
         dirs.push_back(Vec3d(r * std::cos(phi), r * std::sin(phi), z).normalized());
     }
     return dirs;
+}
+
+std::pair<int, int> parseResolution(const std::string& text) {
+    const std::string source = "option --resolution";
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) == 3 && (x == 'x' || x == 'X')) {
+    } else if (std::sscanf(text.c_str(), "%d%c", &w, &extra) == 1) {
+        h = w;
+    } else {
+        throw InputError(source, "cannot read '" + text + "' (expected N or WxH, e.g. 500 or 640x480)");
+    }
+    if (w < 1 || h < 1 || w > 16384 || h > 16384)
+        throw InputError(source, "'" + text + "': each side must be 1 to 16384 pixels");
+    return {w, h};
 }
 
 std::vector<Vec3d> parseDirections(const std::string& text) {

@@ -47,9 +47,6 @@ void collideFn(void* user, RTCCollision* pairs, unsigned int n) {
     tsanRelease(&collideAfter);
 }
 
-struct DeviceDeleter {
-    void operator()(RTCDevice d) const { rtcReleaseDevice(d); }
-};
 struct SceneDeleter {
     void operator()(RTCScene s) const { rtcReleaseScene(s); }
 };
@@ -68,16 +65,19 @@ double seconds(std::chrono::steady_clock::time_point t0) {
 BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateFn fn, void* user) {
     BroadPhaseTimes times;
     auto t0 = std::chrono::steady_clock::now();
-    std::unique_ptr<RTCDeviceTy, DeviceDeleter> device(rtcNewDevice(nullptr));
-    if (!device) throw std::runtime_error("embree: cannot create a device");
-    std::unique_ptr<RTCSceneTy, SceneDeleter> scene(rtcNewScene(device.get()));
-    check(device.get(), "rtcNewScene");
+    // One device for the process (creating one costs milliseconds; a device is thread-safe and
+    // its error state is per thread). Never released: it lives until exit.
+    static const RTCDevice sharedDevice = rtcNewDevice(nullptr);
+    if (!sharedDevice) throw std::runtime_error("embree: cannot create a device");
+    const RTCDevice device = sharedDevice;
+    std::unique_ptr<RTCSceneTy, SceneDeleter> scene(rtcNewScene(device));
+    check(device, "rtcNewScene");
     // Medium (binned SAH): the same candidates as HIGH, built faster; LOW (Morton) builds faster
     // still but doubles the candidates on bunny75k.
     rtcSetSceneBuildQuality(scene.get(), RTC_BUILD_QUALITY_MEDIUM);
     size_t prims = 0;
     for (size_t i = 0; i < objects.size(); ++i) {
-        RTCGeometry g = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_USER);
+        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
         rtcSetGeometryUserPrimitiveCount(g, unsigned(objects[i].size()));
         rtcSetGeometryUserData(g, const_cast<std::vector<Box>*>(&objects[i]));
         rtcSetGeometryBoundsFunction(g, boundsFn, nullptr);
@@ -86,10 +86,10 @@ BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateF
         rtcReleaseGeometry(g);
         prims += objects[i].size();
     }
-    check(device.get(), "geometry setup");
+    check(device, "geometry setup");
     tsanRelease(&buildToken);
     rtcCommitScene(scene.get());
-    check(device.get(), "rtcCommitScene");
+    check(device, "rtcCommitScene");
     times.buildSeconds = seconds(t0);
     if (prims == 0) return times;
 
@@ -98,7 +98,7 @@ BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateF
     tsanRelease(&collideBefore);
     rtcCollide(scene.get(), scene.get(), collideFn, &f);
     tsanAcquire(&collideAfter);
-    check(device.get(), "rtcCollide");
+    check(device, "rtcCollide");
     times.collideSeconds = seconds(t0);
     return times;
 }

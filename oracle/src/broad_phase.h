@@ -32,4 +32,8 @@ struct BroadPhaseTimes {
 // std::runtime_error on an Embree error (a bug or out of memory).
 BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateFn fn, void* user);
 
+// The same pairs from a uniform grid (broad_phase_grid.cpp), each unordered pair once, as
+// (object0, prim0) < (object1, prim1). Throws std::bad_alloc only.
+BroadPhaseTimes collideGrid(std::span<const std::vector<Box>> objects, CandidateFn fn, void* user);
+
 }  // namespace cullide::oracle::detail

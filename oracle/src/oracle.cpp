@@ -3,6 +3,7 @@
 #include "cullide/oracle/oracle.h"
 
 #include "broad_phase.h"
+#include "narrow_phase.h"
 #include "cullide/error.h"
 #include "cullide/oracle/predicates.h"
 
@@ -14,6 +15,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <string>
 
@@ -30,23 +32,12 @@ double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock:
 // products stay far from overflow.
 constexpr double kMaxCoordinate = 0x1p60;
 
-// What the narrow phase reads of one primitive, packed in one cache line: corners (world,
-// float) and vertex indices (welded when asked).
-struct alignas(64) Prim {
-    float p[3][3];
-    Triangle v;
-    uint32_t triangle;  // index in the object's mesh
-};
+using detail::Prim;  // what the narrow phase reads of one primitive (narrow_phase.h)
 
 struct ObjectData {
     std::vector<Prim> prims;  // Embree primitive order = ascending triangle index
     std::vector<Box> boxes;   // one per primitive
 };
-
-TrianglePoints corners(const Prim& p) {
-    return {Vec3d(p.p[0][0], p.p[0][1], p.p[0][2]), Vec3d(p.p[1][0], p.p[1][1], p.p[1][2]),
-            Vec3d(p.p[2][0], p.p[2][1], p.p[2][2])};
-}
 
 struct Local {
     std::vector<IntersectingPair> pairs;
@@ -71,7 +62,7 @@ void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
         ++local.candidates;
         const Prim& a = ctx.objects[c.object0].prims[c.prim0];
         const Prim& b = ctx.objects[c.object1].prims[c.prim1];
-        const Contact contact = faceContact(corners(a), a.v, corners(b), b.v, c.object0 == c.object1);
+        const Contact contact = detail::primContact(a, b, c.object0 == c.object1);
         if (contact != Contact::None) local.pairs.push_back({c.object0, a.triangle, c.object1, b.triangle, toClass(contact)});
     }
 }
@@ -137,37 +128,43 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                                      world.positions[tri[2]].cast<double>());
             }
         });
+        std::vector<uint32_t> kept;  // the primitives' triangles, ascending
+        kept.reserve(n);
         for (size_t t = 0; t < n; ++t) {
             if (subset && !(*subset)[o][t]) continue;
-            if (degen[t]) {
-                truth.degenerate.push_back({uint32_t(o), uint32_t(t)});
-                continue;
-            }
-            const Triangle& tri = world.triangles[t];
-            Prim prim;
-            for (int k = 0; k < 3; ++k) {
-                for (int c = 0; c < 3; ++c) prim.p[k][c] = world.positions[tri[k]][c];
-                prim.v[k] = vertexId.empty() ? tri[k] : vertexId[tri[k]];
-            }
-            prim.triangle = uint32_t(t);
-            d.prims.push_back(prim);
-            Box b;
-            for (int k = 0; k < 3; ++k) {
-                const float a = world.positions[tri[0]][k], bb = world.positions[tri[1]][k], c = world.positions[tri[2]][k];
-                // Float corners: the exact box is a float box; one ulp outward keeps boxes that
-                // only touch overlapping, whatever Embree's comparisons.
-                b.lo[k] = roundDown(std::min({a, bb, c}));
-                b.hi[k] = roundUp(std::max({a, bb, c}));
-            }
-            d.boxes.push_back(b);
+            if (degen[t]) truth.degenerate.push_back({uint32_t(o), uint32_t(t)});
+            else kept.push_back(uint32_t(t));
         }
+        d.prims.resize(kept.size());
+        d.boxes.resize(kept.size());
+        parallelFor(0, kept.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                const uint32_t t = kept[i];
+                const Triangle& tri = world.triangles[t];
+                Prim& prim = d.prims[i];
+                for (int k = 0; k < 3; ++k) {
+                    for (int c = 0; c < 3; ++c) prim.p[k][c] = world.positions[tri[k]][c];
+                    prim.v[k] = vertexId.empty() ? tri[k] : vertexId[tri[k]];
+                }
+                prim.triangle = t;
+                detail::setPlane(prim);
+                Box& b = d.boxes[i];
+                for (int k = 0; k < 3; ++k) {
+                    const float a = world.positions[tri[0]][k], bb = world.positions[tri[1]][k], c = world.positions[tri[2]][k];
+                    // Float corners: the exact box is a float box; one ulp outward keeps boxes
+                    // that only touch overlapping, whatever Embree's comparisons.
+                    b.lo[k] = roundDown(std::min({a, bb, c}));
+                    b.hi[k] = roundUp(std::max({a, bb, c}));
+                }
+            }
+        });
         truth.trianglesTested += d.prims.size();
     }
     truth.setupSeconds = since(t0);
 
     std::vector<std::vector<Box>> boxes(ctx.objects.size());
     for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = std::move(ctx.objects[o].boxes);
-    const detail::BroadPhaseTimes bt = detail::collideAll(boxes, narrowPhase, &ctx);
+    const detail::BroadPhaseTimes bt = getenv("OEMBREE") ? detail::collideAll(boxes, narrowPhase, &ctx) : detail::collideGrid(boxes, narrowPhase, &ctx);
     truth.buildSeconds = bt.buildSeconds;
     truth.collideSeconds = bt.collideSeconds;
 

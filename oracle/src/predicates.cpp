@@ -14,6 +14,8 @@
 // assume every product and sum is rounded on its own, never fused).
 #include "cullide/oracle/predicates.h"
 
+#include "narrow_phase.h"
+
 #include "cullide/error.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -202,4 +204,73 @@ Contact faceContact(const TrianglePoints& a, const Triangle& ia, const TriangleP
     return triangleContact(a, b);
 }
 
+namespace detail {
+namespace {
+
+Vec3d corner(const Prim& p, int k) { return Vec3d(p.p[k][0], p.p[k][1], p.p[k][2]); }
+
+// Sign of orient3d(a's corners, (x, y, z)) when the float filter is sure of it, else 0. The same
+// arithmetic as orient3d (w = s - p0; det = sum w_k n_k; permanent = sum |w_k| perm_k; the error
+// bound (7 + 56 eps) eps * permanent), with the cofactor expansion along w instead of u, which
+// Shewchuk's analysis covers alike (each term one difference times a 2x2 minor of differences).
+inline int planeSide(const Prim& a, double x, double y, double z) {
+    const double wx = x - double(a.p[0][0]), wy = y - double(a.p[0][1]), wz = z - double(a.p[0][2]);
+    const double det = wx * a.n[0] + wy * a.n[1] + wz * a.n[2];
+    const double permanent = std::abs(wx) * a.perm[0] + std::abs(wy) * a.perm[1] + std::abs(wz) * a.perm[2];
+    const double bound = kO3dErrBound * permanent;
+    return det > bound ? 1 : -det > bound ? -1 : 0;
+}
+inline int planeSide(const Prim& a, const Prim& b, int k) { return planeSide(a, b.p[k][0], b.p[k][1], b.p[k][2]); }
+
+// All of b's corners but `skip` (-1: none) certainly strictly on one side of a's plane.
+inline bool oneSide(const Prim& a, const Prim& b, int skip) {
+    int s = 0;
+    for (int k = 0; k < 3; ++k) {
+        if (k == skip) continue;
+        const int d = planeSide(a, b, k);
+        if (d == 0 || (s != 0 && d != s)) return false;
+        s = d;
+    }
+    return true;
+}
+
+}  // namespace
+
+void setPlane(Prim& prim) {
+    const double ux = double(prim.p[1][0]) - double(prim.p[0][0]), uy = double(prim.p[1][1]) - double(prim.p[0][1]),
+                 uz = double(prim.p[1][2]) - double(prim.p[0][2]);
+    const double vx = double(prim.p[2][0]) - double(prim.p[0][0]), vy = double(prim.p[2][1]) - double(prim.p[0][1]),
+                 vz = double(prim.p[2][2]) - double(prim.p[0][2]);
+    const double m1 = uy * vz, m2 = uz * vy, m3 = uz * vx, m4 = ux * vz, m5 = ux * vy, m6 = uy * vx;
+    prim.n[0] = m1 - m2, prim.n[1] = m3 - m4, prim.n[2] = m5 - m6;
+    prim.perm[0] = std::abs(m1) + std::abs(m2);
+    prim.perm[1] = std::abs(m3) + std::abs(m4);
+    prim.perm[2] = std::abs(m5) + std::abs(m6);
+}
+
+Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
+    int shared = 0, sa[3] = {0, 0, 0}, sb[3] = {0, 0, 0};
+    if (sameMesh)
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                if (a.v[i] == b.v[j]) {
+                    sa[shared] = i, sb[shared] = j, ++shared;
+                    break;
+                }
+    if (shared == 2) {
+        // Not a fold-over unless b's opposite corner is on a's plane (faceContact's first test).
+        if (planeSide(a, b, 3 - sb[0] - sb[1]) != 0) return Contact::None;
+    } else if (shared == 1) {
+        // b's opposite edge strictly on one side of a's plane: b meets a's plane only at the
+        // shared vertex, which is on neither opposite edge: no contact elsewhere (and the same
+        // with the roles swapped).
+        if (oneSide(a, b, sb[0]) || oneSide(b, a, sa[0])) return Contact::None;
+    } else if (shared == 0) {
+        if (oneSide(a, b, -1) || oneSide(b, a, -1)) return Contact::None;
+    }
+    const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)}, pb{corner(b, 0), corner(b, 1), corner(b, 2)};
+    return faceContact(pa, a.v, pb, b.v, sameMesh);
+}
+
+}  // namespace detail
 }  // namespace cullide::oracle

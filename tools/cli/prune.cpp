@@ -4,12 +4,11 @@
 #include "oracle_check.h"
 #include "output.h"
 #include "pictures.h"
+#include "study.h"
 
 #include "cullide/cullide.h"
 #include "cullide/error.h"
 #include "cullide/mesh_io.h"
-#include "cullide/raster/cpu_backend.h"
-#include "cullide/raster/gl_backend.h"
 #include "cullide/scene_io.h"
 
 #include <nlohmann/json.hpp>
@@ -39,22 +38,6 @@ struct PruneOptions {
     std::string frames;  // folder for the Figure 12 pictures
     bool check = false, exact = false;  // against the exact oracle (oracle_check.h)
 };
-
-// "500" or "640x480".
-std::pair<int, int> parseResolution(const std::string& text) {
-    const std::string source = "option --resolution";
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) == 3 && (x == 'x' || x == 'X')) {
-    } else if (std::sscanf(text.c_str(), "%d%c", &w, &extra) == 1) {
-        h = w;
-    } else {
-        throw InputError(source, "cannot read '" + text + "' (expected N or WxH, e.g. 500 or 640x480)");
-    }
-    if (w < 1 || h < 1 || w > 16384 || h > 16384)
-        throw InputError(source, "'" + text + "': each side must be 1 to 16384 pixels");
-    return {w, h};
-}
 
 CullideOptions cullideOptions(const PruneOptions& o) {
     CullideOptions c;
@@ -103,10 +86,7 @@ void writePcsPly(const Scene& scene, const std::vector<PcsTriangle>& pcs, const 
 
 int runPrune(const PruneOptions& o) {
     const CullideOptions options = cullideOptions(o);
-    raster::CpuBackendOptions bo;
-    bo.threads = o.threads;
-    const std::unique_ptr<DepthBackend> backend =
-        o.backend == "gl" ? std::unique_ptr<DepthBackend>(raster::makeGlBackend()) : raster::makeCpuBackend(bo);
+    const std::unique_ptr<DepthBackend> backend = study::makeBackend(o.backend, o.threads);
 
     const Animation animation = loadScene(o.scene);
     if (o.frame >= 0 && size_t(o.frame) >= animation.frameCount())

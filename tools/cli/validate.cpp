@@ -35,21 +35,6 @@ struct ValidateOptions {
     double depthLsb = 2.0;
 };
 
-std::pair<int, int> parseSize(const std::string& text) {
-    const std::string source = "option --resolution";
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) == 3 && (x == 'x' || x == 'X')) {
-    } else if (std::sscanf(text.c_str(), "%d%c", &w, &extra) == 1) {
-        h = w;
-    } else {
-        throw InputError(source, "cannot read '" + text + "' (expected N or WxH, e.g. 500 or 640x480)");
-    }
-    if (w < 1 || h < 1 || w > 16384 || h > 16384)
-        throw InputError(source, "'" + text + "': each side must be 1 to 16384 pixels");
-    return {w, h};
-}
-
 // Difference picture of one query (reference side): white = certainly passes, green = ambiguous
 // and passes in the reference, yellow = ambiguous, red = passes in the reference but outside the
 // possible set (a bug), black = nothing.
@@ -74,7 +59,7 @@ void writeQueryPng(const raster::CoverageCapture& c, const OrthoView& view, cons
 int runValidate(const ValidateOptions& o) {
     CullideOptions options;
     options.method = parseCullMethod(o.method);
-    std::tie(options.width, options.height) = parseSize(o.resolution);
+    std::tie(options.width, options.height) = parseResolution(o.resolution);
     try {
         options.depth = DepthFormat::parse(o.depth);
     } catch (const InputError& e) {

@@ -276,15 +276,7 @@ std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads) 
 CullideOptions cullideOptions(const RunConfig& c) {
     CullideOptions o;
     o.method = parseCullMethod(c.method);
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(c.resolution.c_str(), "%d%c%d%c", &w, &x, &h, &extra) == 3 && (x == 'x' || x == 'X')) {
-    } else if (std::sscanf(c.resolution.c_str(), "%d%c", &w, &extra) == 1) {
-        h = w;
-    } else {
-        throw InputError("resolution", "'" + c.resolution + "': expected N or WxH");
-    }
-    o.width = w, o.height = h;
+    std::tie(o.width, o.height) = parseResolution(c.resolution);
     o.depth = DepthFormat::parse(c.depth);
     o.directions = parseDirections(c.directions);
     o.hierarchy.kind = parseHierarchyKind(c.hierarchy);

@@ -33,6 +33,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace cullide {
@@ -65,6 +66,9 @@ CullMethod parseCullMethod(const std::string& text);  // "original" | "modified"
 std::vector<Vec3d> axisDirections();
 // N directions spread over the sphere (a Fibonacci lattice, deterministic). N >= 1.
 std::vector<Vec3d> spreadDirections(uint32_t n);
+// Parses a viewport "N" (N x N) or "WxH", each side 1..16384; InputError("option --resolution").
+std::pair<int, int> parseResolution(const std::string& text);
+
 // Parses "axes", "N" (spread), or a list "x,-y,z" / "1 0 0;0 1 1" of directions; InputError.
 std::vector<Vec3d> parseDirections(const std::string& text);
 
