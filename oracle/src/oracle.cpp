@@ -15,7 +15,6 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <string>
 
@@ -164,7 +163,7 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
 
     std::vector<std::vector<Box>> boxes(ctx.objects.size());
     for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = std::move(ctx.objects[o].boxes);
-    const detail::BroadPhaseTimes bt = getenv("OEMBREE") ? detail::collideAll(boxes, narrowPhase, &ctx) : detail::collideGrid(boxes, narrowPhase, &ctx);
+    const detail::BroadPhaseTimes bt = detail::collideGrid(boxes, narrowPhase, &ctx);
     truth.buildSeconds = bt.buildSeconds;
     truth.collideSeconds = bt.collideSeconds;
 
