@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <memory>
 
 namespace cullide::oracle::detail {
 namespace {
@@ -40,20 +41,27 @@ struct Grid {
     uint64_t key(uint32_t x, uint32_t y, uint32_t z) const { return (uint64_t(x) * dims[1] + y) * dims[2] + z; }
 };
 
-// Sorts 64-bit values by their bits [32, 32 + keyBits) (LSD, stable: entries equal there keep
-// their order).
-void radixSort(std::vector<uint64_t>& v, int keyBits) {
-    std::vector<uint64_t> tmp(v.size());
-    for (int shift = 32; shift < 32 + keyBits; shift += 8) {
-        size_t count[257] = {};
-        for (uint64_t x : v) ++count[((x >> shift) & 0xff) + 1];
-        for (int i = 0; i < 256; ++i) count[i + 1] += count[i];
-        for (uint64_t x : v) tmp[count[(x >> shift) & 0xff]++] = x;
-        v.swap(tmp);
-    }
-}
-
 }  // namespace
+
+uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits) {
+    const int passes = (keyBits + 7) / 8;
+    std::vector<size_t> count(size_t(passes) * 256, 0);
+    for (size_t i = 0; i < n; ++i)
+        for (int p = 0; p < passes; ++p) ++count[size_t(p) * 256 + ((v[i] >> (32 + 8 * p)) & 0xff)];
+    for (int p = 0; p < passes; ++p) {
+        size_t* c = count.data() + size_t(p) * 256;
+        size_t sum = 0;
+        for (int d = 0; d < 256; ++d) {
+            const size_t k = c[d];
+            c[d] = sum;
+            sum += k;
+        }
+        const int shift = 32 + 8 * p;
+        for (size_t i = 0; i < n; ++i) tmp[c[(v[i] >> shift) & 0xff]++] = v[i];
+        std::swap(v, tmp);
+    }
+    return v;
+}
 
 BroadPhaseTimes collideGrid(std::span<const std::vector<Box>> objects, CandidateFn fn, void* user) {
     BroadPhaseTimes times;
@@ -118,24 +126,27 @@ BroadPhaseTimes collideGrid(std::span<const std::vector<Box>> objects, Candidate
         if (first[g + 1] == 0) big.push_back(uint32_t(g));
         first[g + 1] += first[g];
     }
-    std::vector<uint64_t> entries(first[n]);
+    // Not value-initialised (every element is written): no pass over fresh memory.
+    const size_t entryCount = first[n];
+    std::unique_ptr<uint64_t[]> entryBuffer(new uint64_t[entryCount]), tmpBuffer(new uint64_t[entryCount]);
+    uint64_t* entries = entryBuffer.get();
     parallelFor(0, n, 4096, [&](const tbb::blocked_range<size_t>& r) {
         for (size_t g = r.begin(); g != r.end(); ++g) {
             if (first[g + 1] == first[g]) continue;
             const Box& b = boxes[g];
             uint32_t l[3], h[3];
             for (int k = 0; k < 3; ++k) l[k] = grid.cell(b.lo[k], k), h[k] = grid.cell(b.hi[k], k);
-            uint64_t* out = entries.data() + first[g];
+            uint64_t* out = entries + first[g];
             for (uint32_t x = l[0]; x <= h[0]; ++x)
                 for (uint32_t y = l[1]; y <= h[1]; ++y)
                     for (uint32_t z = l[2]; z <= h[2]; ++z) *out++ = grid.key(x, y, z) << 32 | g;
         }
     });
-    radixSort(entries, keyBits);
+    entries = radixSortHigh(entries, tmpBuffer.get(), entryCount, keyBits);
     std::vector<size_t> runs;  // start of each cell's entries, then the end
-    for (size_t i = 0; i < entries.size(); ++i)
+    for (size_t i = 0; i < entryCount; ++i)
         if (i == 0 || entries[i] >> 32 != entries[i - 1] >> 32) runs.push_back(i);
-    runs.push_back(entries.size());
+    runs.push_back(entryCount);
 
     // Each cell's boxes, packed in cell order, with the axes on which the cell is the box's
     // lower corner's cell: a pair's owner cell (the larger lower cell on each axis, cell() being
@@ -144,7 +155,7 @@ BroadPhaseTimes collideGrid(std::span<const std::vector<Box>> objects, Candidate
         Box box;
         uint32_t g, low;  // low: bit k when the box's lower corner is in this cell along k
     };
-    std::vector<Entry> packed(entries.size());
+    std::unique_ptr<Entry[]> packed(new Entry[entryCount]);
     parallelFor(0, runs.size() - 1, 256, [&](const tbb::blocked_range<size_t>& r) {
         for (size_t run = r.begin(); run != r.end(); ++run) {
             const uint64_t key = entries[runs[run]] >> 32;

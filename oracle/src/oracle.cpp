@@ -56,13 +56,18 @@ void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
     Local& local = ctx.locals.local();
     for (uint32_t k = 0; k < count; ++k) {
         const Candidate& c = pairs[k];
-        // Each unordered pair comes in both orders: keep (object, primitive) ascending.
+        // The broad phase reports each unordered pair once (the filter is for one reporting
+        // both orders); primitives are in spatial order, so order the triangles for the output.
         if (c.object0 > c.object1 || (c.object0 == c.object1 && c.prim0 >= c.prim1)) continue;
         ++local.candidates;
         const Prim& a = ctx.objects[c.object0].prims[c.prim0];
         const Prim& b = ctx.objects[c.object1].prims[c.prim1];
         const Contact contact = detail::primContact(a, b, c.object0 == c.object1);
-        if (contact != Contact::None) local.pairs.push_back({c.object0, a.triangle, c.object1, b.triangle, toClass(contact)});
+        if (contact == Contact::None) continue;
+        if (c.object0 == c.object1 && a.triangle > b.triangle)
+            local.pairs.push_back({c.object0, b.triangle, c.object1, a.triangle, toClass(contact)});
+        else
+            local.pairs.push_back({c.object0, a.triangle, c.object1, b.triangle, toClass(contact)});
     }
 }
 
@@ -83,6 +88,33 @@ std::vector<uint32_t> weldMap(const std::vector<Vec3f>& positions) {
     for (size_t k = 0; k < order.size(); ++k)
         map[order[k]] = (k > 0 && bits(positions[order[k]]) == bits(positions[order[k - 1]])) ? map[order[k - 1]] : order[k];
     return map;
+}
+
+// Sorts `kept` (triangle indices, ascending) by the Morton code of the triangles' first corner
+// on a 2^10 grid over the mesh's bounds, ties by index: neighbours in space become neighbours in
+// memory, which the narrow phase's random reads of primitive records need (cache misses).
+void spatialOrder(const Mesh& world, std::vector<uint32_t>& kept) {
+    if (kept.size() < 2) return;
+    Vec3f lo = world.positions[world.triangles[kept[0]][0]], hi = lo;
+    for (uint32_t t : kept) {
+        const Vec3f& p = world.positions[world.triangles[t][0]];
+        lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    }
+    std::vector<uint64_t> keys(kept.size()), tmp(kept.size());
+    parallelFor(0, kept.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            const Vec3f& p = world.positions[world.triangles[kept[i]][0]];
+            uint64_t code = 0;
+            for (int k = 0; k < 3; ++k) {
+                const float extent = hi[k] - lo[k];
+                const uint64_t q = extent > 0 ? std::min<uint64_t>(1023, uint64_t(double(p[k] - lo[k]) / extent * 1024)) : 0;
+                for (int b = 0; b < 10; ++b) code |= ((q >> b) & 1) << (3 * b + k);
+            }
+            keys[i] = code << 32 | kept[i];
+        }
+    });
+    const uint64_t* sorted = detail::radixSortHigh(keys.data(), tmp.data(), keys.size(), 30);
+    for (size_t i = 0; i < kept.size(); ++i) kept[i] = uint32_t(sorted[i]);
 }
 
 float roundDown(float x) { return std::nextafter(x, -std::numeric_limits<float>::infinity()); }
@@ -127,13 +159,14 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                                      world.positions[tri[2]].cast<double>());
             }
         });
-        std::vector<uint32_t> kept;  // the primitives' triangles, ascending
+        std::vector<uint32_t> kept;  // the primitives' triangles
         kept.reserve(n);
         for (size_t t = 0; t < n; ++t) {
             if (subset && !(*subset)[o][t]) continue;
             if (degen[t]) truth.degenerate.push_back({uint32_t(o), uint32_t(t)});
             else kept.push_back(uint32_t(t));
         }
+        spatialOrder(world, kept);
         d.prims.resize(kept.size());
         d.boxes.resize(kept.size());
         parallelFor(0, kept.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {

@@ -21,7 +21,10 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/intersections.h>
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 namespace cullide::oracle {
 namespace {
@@ -37,6 +40,104 @@ Kernel::Triangle_3 toTriangle(const TrianglePoints& t) {
 constexpr double kEps = 0x1p-53;
 constexpr double kO3dErrBound = (7.0 + 56.0 * kEps) * kEps;
 constexpr double kO2dErrBound = (3.0 + 16.0 * kEps) * kEps;
+
+// orient3d exactly in integers when the 12 coordinates are floats (as the oracle's always are)
+// close enough in magnitude: each coordinate is an integer times 2^emin (emin: the lowest set
+// bit among them), below 2^62 in that unit when the spread allows; the differences then need at
+// most 41 bits each for the determinant to fit a 128-bit integer (3 * 41 + 3 bits). Returns false
+// (undecided) otherwise. It decides exactly the cases the float filter cannot: nearly or exactly
+// coplanar points, which CGAL would hand to multiprecision arithmetic.
+// Exact integer coordinates for n float-valued doubles: each is an integer times 2^emin (emin:
+// the lowest set bit among them); false when one is not a float or they span over 62 bits.
+bool toIntegers(const double* x, int n, int64_t* out) {
+    int emin = 1 << 20, emax = -(1 << 20);
+    int64_t m[12];
+    int unit[12];
+    for (int i = 0; i < n; ++i) {
+        const float f = float(x[i]);
+        if (double(f) != x[i]) return false;
+        const uint32_t b = std::bit_cast<uint32_t>(f);
+        int e = int((b >> 23) & 0xff);
+        uint32_t mant = b & 0x7fffff;
+        if (e != 0) mant |= 0x800000;
+        else e = 1;  // subnormal
+        unit[i] = e - 150;  // |f| = mant * 2^unit
+        m[i] = (b >> 31) ? -int64_t(mant) : int64_t(mant);
+        if (mant == 0) continue;
+        emin = std::min(emin, unit[i] + std::countr_zero(mant));
+        emax = std::max(emax, unit[i] + 32 - std::countl_zero(mant));  // |f| < 2^emax
+    }
+    if (emax - emin > 62) return false;
+    for (int i = 0; i < n; ++i) {
+        if (m[i] == 0) {
+            out[i] = 0;
+            continue;
+        }
+        // m * 2^(unit - emin): unit >= emin - 23 (m's trailing zeros), |result| < 2^62.
+        const int shift = unit[i] - emin;
+        out[i] = shift >= 0 ? m[i] * (int64_t(1) << shift) : m[i] / (int64_t(1) << -shift);  // exact
+    }
+    return true;
+}
+
+// orient3d exactly in integers when the 12 coordinates are floats (as the oracle's always are)
+// close enough in magnitude: the differences then need at most 41 bits each for the determinant
+// to fit a 128-bit integer (3 * 41 + 3 bits). Returns false (undecided) otherwise. It decides the
+// cases the float filter cannot (nearly or exactly coplanar points) without CGAL's
+// multiprecision arithmetic.
+bool orient3dFromFloats(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s, int* result) {
+    const double x[12] = {p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), r.x(), r.y(), r.z(), s.x(), s.y(), s.z()};
+    int64_t c[12];
+    if (!toIntegers(x, 12, c)) return false;
+    int64_t d[3][3];
+    constexpr int64_t kLimit = int64_t(1) << 41;
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) {
+            d[i][k] = c[3 * (i + 1) + k] - c[k];  // |.| < 2^63
+            if (d[i][k] >= kLimit || d[i][k] <= -kLimit) return false;
+        }
+    using I = __int128;
+    const I det = I(d[0][0]) * (I(d[1][1]) * d[2][2] - I(d[1][2]) * d[2][1]) +
+                  I(d[0][1]) * (I(d[1][2]) * d[2][0] - I(d[1][0]) * d[2][2]) +
+                  I(d[0][2]) * (I(d[1][0]) * d[2][1] - I(d[1][1]) * d[2][0]);
+    *result = det > 0 ? 1 : det < 0 ? -1 : 0;
+    return true;
+}
+
+// Sign of the 2D orientation of p, q, r projected on axes (i, j), exactly: float filter, then
+// integers (differences below 2^62 bits... checked: below 2^61), then CGAL.
+int orient2d(const Vec3d& p, const Vec3d& q, const Vec3d& r, int i, int j) {
+    const double l = (q[i] - p[i]) * (r[j] - p[j]);
+    const double rr = (q[j] - p[j]) * (r[i] - p[i]);
+    const double det = l - rr;
+    const double bound = kO2dErrBound * (std::abs(l) + std::abs(rr));
+    if (det > bound) return 1;
+    if (-det > bound) return -1;
+    const double x[6] = {p[i], p[j], q[i], q[j], r[i], r[j]};
+    int64_t c[6];
+    if (toIntegers(x, 6, c)) {
+        const int64_t a = c[2] - c[0], b = c[3] - c[1], e = c[4] - c[0], f = c[5] - c[1];  // |.| < 2^63
+        constexpr int64_t kLimit = int64_t(1) << 62;
+        if (a < kLimit && a > -kLimit && b < kLimit && b > -kLimit && e < kLimit && e > -kLimit && f < kLimit && f > -kLimit) {
+            const __int128 d = __int128(a) * f - __int128(b) * e;  // |.| < 2^125
+            return d > 0 ? 1 : d < 0 ? -1 : 0;
+        }
+    }
+    using P2 = Kernel::Point_2;
+    const CGAL::Orientation o = CGAL::orientation(P2(p[i], p[j]), P2(q[i], q[j]), P2(r[i], r[j]));
+    return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0;
+}
+
+// CGAL's coplanar_orientation(p, q, r, s) (coplanar points, p q r not collinear): +1 when s is on
+// r's side of the line pq, -1 on the other side, 0 on the line; its projections, in its order.
+int coplanarOrientation(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s) {
+    static constexpr int kAxes[3][2] = {{0, 1}, {1, 2}, {0, 2}};
+    for (const auto& ax : kAxes) {
+        const int o = orient2d(p, q, r, ax[0], ax[1]);
+        if (o != 0) return o * orient2d(p, q, s, ax[0], ax[1]);
+    }
+    return 0;  // p q r collinear: not called so
+}
 
 int sign(CGAL::Orientation o) { return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0; }
 
@@ -107,6 +208,8 @@ int orient3d(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s) {
     const double bound = kO3dErrBound * permanent;
     if (det > bound) return 1;
     if (-det > bound) return -1;
+    int exact = 0;
+    if (orient3dFromFloats(p, q, r, s, &exact)) return exact;
     return sign(CGAL::orientation(toPoint(p), toPoint(q), toPoint(r), toPoint(s)));
 }
 
@@ -185,9 +288,7 @@ Contact faceContact(const TrianglePoints& a, const Triangle& ia, const TriangleP
             const Vec3d& ra = a[3 - sa[0] - sa[1]];
             const Vec3d& rb = b[3 - sb[0] - sb[1]];
             if (orient3d(a[0], a[1], a[2], rb) != 0) return Contact::None;
-            return CGAL::coplanar_orientation(toPoint(e0), toPoint(e1), toPoint(ra), toPoint(rb)) == CGAL::POSITIVE
-                       ? Contact::Touching
-                       : Contact::None;
+            return coplanarOrientation(e0, e1, ra, rb) > 0 ? Contact::Touching : Contact::None;
         }
         if (shared == 1) {
             // Shared vertex (CGAL's rule): they meet elsewhere iff one meets the other's
