@@ -33,9 +33,6 @@ using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 
 Point toPoint(const Vec3d& p) { return Point(p.x(), p.y(), p.z()); }
-Kernel::Triangle_3 toTriangle(const TrianglePoints& t) {
-    return Kernel::Triangle_3(toPoint(t[0]), toPoint(t[1]), toPoint(t[2]));
-}
 
 constexpr double kEps = 0x1p-53;
 constexpr double kO3dErrBound = (7.0 + 56.0 * kEps) * kEps;
@@ -149,6 +146,61 @@ bool orient2dCertainlyNonZero(const Vec3d& p, const Vec3d& q, const Vec3d& r, in
     return std::abs(det) > kO2dErrBound * (std::abs(l) + std::abs(rr));
 }
 
+// Coplanar points, exactly: an axis pair (i, j) on which the non-degenerate triangle t projects
+// non-degenerately, and its orientation there (CGAL's projection order: xy, yz, xz).
+int coplanarFrame(const TrianglePoints& t, int* i, int* j) {
+    static constexpr int kAxes[3][2] = {{0, 1}, {1, 2}, {0, 2}};
+    for (const auto& ax : kAxes) {
+        const int o = orient2d(t[0], t[1], t[2], ax[0], ax[1]);
+        if (o != 0) {
+            *i = ax[0], *j = ax[1];
+            return o;
+        }
+    }
+    return 0;
+}
+
+// p on the closed segment [a, b], given that the three are collinear (in projection i, j).
+bool onCollinearSegment(const Vec3d& a, const Vec3d& b, const Vec3d& p, int i, int j) {
+    return std::min(a[i], b[i]) <= p[i] && p[i] <= std::max(a[i], b[i]) && std::min(a[j], b[j]) <= p[j] &&
+           p[j] <= std::max(a[j], b[j]);
+}
+
+// Closed segments [p1, p2] and [p3, p4] meet (2D, projection i, j).
+bool segmentsMeet2d(const Vec3d& p1, const Vec3d& p2, const Vec3d& p3, const Vec3d& p4, int i, int j) {
+    const int d1 = orient2d(p3, p4, p1, i, j), d2 = orient2d(p3, p4, p2, i, j);
+    const int d3 = orient2d(p1, p2, p3, i, j), d4 = orient2d(p1, p2, p4, i, j);
+    if (d1 * d2 < 0 && d3 * d4 < 0) return true;
+    return (d1 == 0 && onCollinearSegment(p3, p4, p1, i, j)) || (d2 == 0 && onCollinearSegment(p3, p4, p2, i, j)) ||
+           (d3 == 0 && onCollinearSegment(p1, p2, p3, i, j)) || (d4 == 0 && onCollinearSegment(p1, p2, p4, i, j));
+}
+
+// p in the closed triangle t (2D, projection i, j, t's orientation o there).
+bool inTriangle2d(const TrianglePoints& t, const Vec3d& p, int i, int j, int o) {
+    return orient2d(t[0], t[1], p, i, j) * o >= 0 && orient2d(t[1], t[2], p, i, j) * o >= 0 &&
+           orient2d(t[2], t[0], p, i, j) * o >= 0;
+}
+
+// The closed segment [s0, s1] meets the closed triangle t, all coplanar: an end inside, or the
+// segment meets an edge. Exact (orient2d); CGAL's answer.
+bool coplanarTriangleSegment(const TrianglePoints& t, const Vec3d& s0, const Vec3d& s1) {
+    int i = 0, j = 1;
+    const int o = coplanarFrame(t, &i, &j);
+    if (inTriangle2d(t, s0, i, j, o) || inTriangle2d(t, s1, i, j, o)) return true;
+    for (int k = 0; k < 3; ++k)
+        if (segmentsMeet2d(s0, s1, t[k], t[(k + 1) % 3], i, j)) return true;
+    return false;
+}
+
+// Two coplanar closed triangles meet: an edge of a meets b, or b lies inside a.
+bool coplanarTriangles(const TrianglePoints& a, const TrianglePoints& b) {
+    for (int k = 0; k < 3; ++k)
+        if (coplanarTriangleSegment(b, a[k], a[(k + 1) % 3])) return true;
+    int i = 0, j = 1;
+    const int o = coplanarFrame(a, &i, &j);
+    return inTriangle2d(a, b[0], i, j, o);
+}
+
 // Guigue-Devillers' canonical order, CGAL's table: given the signs of a triangle's corners
 // (0, 1, 2) with respect to the other's plane, the corners (sMin, tMin, sMax, tMax) of the two
 // edges that bound its chord on the planes' common line. Returns false when all three signs are
@@ -231,7 +283,7 @@ Contact triangleContact(const TrianglePoints& a, const TrianglePoints& b) {
     if (!canonicalOrder(da0, da1, da2, ia, &coplanar)) {
         if (!coplanar) return Contact::None;
         // Coplanar: CGAL's 2D test on coplanar orientations (rare; it decides exactly too).
-        return CGAL::do_intersect(toTriangle(a), toTriangle(b)) ? Contact::Touching : Contact::None;
+        return coplanarTriangles(a, b) ? Contact::Touching : Contact::None;
     }
     const int db0 = orient3d(a[0], a[1], a[2], b[0]);
     const int db1 = orient3d(a[0], a[1], a[2], b[1]);
@@ -240,7 +292,7 @@ Contact triangleContact(const TrianglePoints& a, const TrianglePoints& b) {
         // b's corners all on a's plane while a's are not all on b's: impossible for
         // non-degenerate triangles, but answer as CGAL does.
         if (!coplanar) return Contact::None;
-        return CGAL::do_intersect(toTriangle(a), toTriangle(b)) ? Contact::Touching : Contact::None;
+        return coplanarTriangles(a, b) ? Contact::Touching : Contact::None;
     }
     // The chords [i, j] of a and [k, l] of b on the common line overlap iff k <= j and i <= l;
     // each comparison is the sign of one orientation (zero: the two ends coincide).
@@ -258,7 +310,7 @@ bool triangleSegmentIntersect(const TrianglePoints& t, const Vec3d& s0, const Ve
     const int d1 = orient3d(t[0], t[1], t[2], s1);
     if (d0 == d1 && d0 != 0) return false;  // both strictly on one side
     if (d0 == 0 && d1 == 0)                 // in the triangle's plane: CGAL's coplanar test
-        return CGAL::do_intersect(toTriangle(t), Kernel::Segment_3(toPoint(s0), toPoint(s1)));
+        return coplanarTriangleSegment(t, s0, s1);
     // The segment meets the plane in one point; it lies in the closed triangle iff the line
     // s0 s1 passes on the same (closed) side of the three edges.
     const int e0 = orient3d(s0, s1, t[0], t[1]);
@@ -366,6 +418,30 @@ Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
         // shared vertex, which is on neither opposite edge: no contact elsewhere (and the same
         // with the roles swapped).
         if (oneSide(a, b, sb[0]) || oneSide(b, a, sa[0])) return Contact::None;
+        // Coplanar (b's other corners exactly on a's plane, hence all six points): they meet
+        // besides the shared vertex v iff their closed wedges at v share more than v, i.e. a
+        // boundary ray of one lies in the other. The same answer as the opposite-edge rule (if
+        // the wedges overlap in a cone C, either the opposite edges cross in C or the nearer one
+        // lies in the other triangle), decided with a few exact 2D orientations.
+        const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)};
+        const Vec3d& v = pa[sa[0]];
+        const Vec3d &a1 = pa[(sa[0] + 1) % 3], &a2 = pa[(sa[0] + 2) % 3];
+        const Vec3d b1 = corner(b, (sb[0] + 1) % 3), b2 = corner(b, (sb[0] + 2) % 3);
+        auto exactSide = [&](const Vec3d& q, int k) {
+            const int d = planeSide(a, b, k);
+            return d != 0 ? d : orient3d(pa[0], pa[1], pa[2], q);
+        };
+        if (exactSide(b1, (sb[0] + 1) % 3) == 0 && exactSide(b2, (sb[0] + 2) % 3) == 0) {
+            int i = 0, j = 1;
+            coplanarFrame(pa, &i, &j);  // a (so b too, being coplanar) projects non-degenerately
+            const int oa = orient2d(v, a1, a2, i, j), ob = orient2d(v, b1, b2, i, j);
+            auto inWedge = [&](const Vec3d& p1, const Vec3d& p2, int o, const Vec3d& p) {
+                return o * orient2d(v, p1, p, i, j) >= 0 && o * orient2d(v, p, p2, i, j) >= 0;
+            };
+            const bool meet = inWedge(a1, a2, oa, b1) || inWedge(a1, a2, oa, b2) || inWedge(b1, b2, ob, a1) ||
+                              inWedge(b1, b2, ob, a2);
+            return meet ? Contact::Touching : Contact::None;
+        }
     } else if (shared == 0) {
         if (oneSide(a, b, -1) || oneSide(b, a, -1)) return Contact::None;
     }
