@@ -72,7 +72,7 @@ bool toIntegers(const double* x, int n, int64_t* out) {
         }
         // m * 2^(unit - emin): unit >= emin - 23 (m's trailing zeros), |result| < 2^62.
         const int shift = unit[i] - emin;
-        out[i] = shift >= 0 ? m[i] * (int64_t(1) << shift) : m[i] / (int64_t(1) << -shift);  // exact
+        out[i] = shift >= 0 ? m[i] << shift : m[i] >> -shift;  // exact (C++20 shifts of negatives)
     }
     return true;
 }
