@@ -1,5 +1,5 @@
-// The exact oracle (see oracle.h): Embree's broad phase, then the exact narrow phase of
-// predicates.cpp inside the collision callback, per thread, merged and sorted at the end.
+// The exact oracle (see oracle.h): the grid's broad phase (broad_phase_grid.cpp), then the exact
+// narrow phase (narrow_phase.h, predicates.cpp) on its candidates, per thread, merged and sorted.
 #include "cullide/oracle/oracle.h"
 
 #include "broad_phase.h"

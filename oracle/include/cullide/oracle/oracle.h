@@ -5,7 +5,8 @@
 //     predicates. Journal of Graphics Tools 8(1), 2003 (the narrow phase; predicates.h).
 //   - CGAL 5.5 Polygon_mesh_processing::self_intersections (the rules for faces that share
 //     vertices, which we follow so that both can be compared pair for pair).
-//   - Embree 3 rtcCollide (the broad phase: user geometry, one float box per triangle).
+//   - The broad phase: a uniform grid of float boxes, one per triangle (docs/oracle.md); Embree 3
+//     rtcCollide (user geometry) finds the same pairs and is kept beside it.
 //   - ../shared/notes/oracle.md; the full rules are in docs/oracle.md.
 //
 // Conventions
@@ -26,7 +27,7 @@
 //   - Classes (predicates.h): crossing when the two triangles are not coplanar and their
 //     relative interiors meet (one passes through the other); touching otherwise (they meet
 //     only on a boundary of one of them, or in the plane they share).
-//   - Threads: TBB (Embree's traversal and our narrow phase run inside it); limit them with
+//   - Threads: TBB (the grid's construction and the narrow phase run on it); limit them with
 //     tbb::global_control or a task_arena. The result does not depend on the thread count.
 //   - Errors: InputError("scene", ...) for input the oracle cannot decide on (non-finite
 //     coordinates, |coordinate| > 2^60, indices out of range); nothing else is thrown.
@@ -75,8 +76,8 @@ struct Truth {
     size_t trianglesTested = 0;            // non-degenerate triangles given to the broad phase
     size_t candidatePairs = 0;             // broad-phase pairs given to the narrow phase
     double setupSeconds = 0;               // validation, world positions, degeneracy, boxes
-    double buildSeconds = 0;               // Embree BVH build
-    double collideSeconds = 0;             // rtcCollide with the narrow phase inside it
+    double buildSeconds = 0;               // broad phase: building the grid
+    double collideSeconds = 0;             // pair tests in the cells, narrow phase inside
     double sortSeconds = 0;                // merging the per-thread results
     double totalSeconds = 0;
 
