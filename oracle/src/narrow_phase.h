@@ -10,6 +10,8 @@
 #include "cullide/mesh.h"
 #include "cullide/oracle/predicates.h"
 
+#include <climits>
+#include <cstddef>
 #include <cstdint>
 
 namespace cullide::oracle::detail {
@@ -17,13 +19,22 @@ namespace cullide::oracle::detail {
 struct alignas(64) Prim {
     double n[3];     // (p1 - p0) x (p2 - p0), evaluated as orient3d's filter does
     double perm[3];  // |products| of each component of n, summed (the permanent's factors)
+    int64_t ni[3];   // the same cross product exactly, in integers of 2^unit (when unit is set)
     float p[3][3];   // world corners (float; exact in double)
     Triangle v;      // vertex ids for the sharing rules (welded when asked)
     uint32_t triangle;  // index in the object's mesh
+    int32_t unit;    // the corners' coordinates are integers times 2^unit below 2^62 (the lowest
+                     // set bit among them), the edges below 2^30 of it; kNoUnit otherwise
 };
 static_assert(sizeof(Prim) == 128);
 
-// Fills n and perm from p (p, v, triangle set by the caller).
+constexpr int32_t kNoUnit = INT32_MIN;
+
+// The power of two in which all of `coordinates` are integers below 2^62 (their lowest set bit),
+// or kNoUnit when they span more than that.
+int32_t integerUnit(const float* coordinates, size_t count);
+
+// Fills n, perm, ni and unit from p (p, v, triangle set by the caller).
 void setPlane(Prim& prim);
 
 // The narrow phase of one candidate pair (faceContact's answer, exactly): quick rejections by

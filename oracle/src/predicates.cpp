@@ -360,6 +360,12 @@ Contact faceContact(const TrianglePoints& a, const Triangle& ia, const TriangleP
 namespace detail {
 namespace {
 
+// 2^k as a double (-1022 <= k <= 1023).
+double pow2(int k) { return std::bit_cast<double>(uint64_t(1023 + k) << 52); }
+
+// x (a float) in integers of 2^unit: exact (a power-of-two scaling, an integer below 2^62).
+int64_t toUnit(float x, double scale) { return int64_t(double(x) * scale); }
+
 Vec3d corner(const Prim& p, int k) { return Vec3d(p.p[k][0], p.p[k][1], p.p[k][2]); }
 
 // Sign of orient3d(a's corners, (x, y, z)) when the float filter is sure of it, else 0. The same
@@ -375,6 +381,35 @@ inline int planeSide(const Prim& a, double x, double y, double z) {
 }
 inline int planeSide(const Prim& a, const Prim& b, int k) { return planeSide(a, b.p[k][0], b.p[k][1], b.p[k][2]); }
 
+// Sign of orient3d(a's corners, b's corner k), exactly: the filter, then a's integer normal when
+// b's corner is an integer in a's unit (|N| < 2^61, |w| < 2^63: the dot product fits 126 bits),
+// then orient3d.
+int exactSide(const Prim& a, const Prim& b, int k) {
+    const int d = planeSide(a, b, k);
+    if (d != 0) return d;
+    if (a.unit != kNoUnit) {
+        const double scale = pow2(-a.unit);
+        __int128 det = 0;
+        bool exact = true;
+        for (int c = 0; c < 3; ++c) {
+            // b's corner in a's unit: exact when it is an integer there, below 2^62.
+            const double y = double(b.p[k][c]) * scale;
+            if (!(std::abs(y) < 0x1p62)) {
+                exact = false;
+                break;
+            }
+            const int64_t q = int64_t(y);
+            if (double(q) != y) {
+                exact = false;
+                break;
+            }
+            det += __int128(a.ni[c]) * (q - toUnit(a.p[0][c], scale));  // |N| < 2^61, |w| < 2^63
+        }
+        if (exact) return det > 0 ? 1 : det < 0 ? -1 : 0;
+    }
+    return orient3d(corner(a, 0), corner(a, 1), corner(a, 2), corner(b, k));
+}
+
 // All of b's corners but `skip` (-1: none) certainly strictly on one side of a's plane.
 inline bool oneSide(const Prim& a, const Prim& b, int skip) {
     int s = 0;
@@ -389,6 +424,22 @@ inline bool oneSide(const Prim& a, const Prim& b, int skip) {
 
 }  // namespace
 
+int32_t integerUnit(const float* x, size_t count) {
+    int emin = 1 << 20, emax = -(1 << 20);
+    for (size_t i = 0; i < count; ++i) {
+        const uint32_t b = std::bit_cast<uint32_t>(x[i]);
+        int e = int((b >> 23) & 0xff);
+        uint32_t mant = b & 0x7fffff;
+        if (e != 0) mant |= 0x800000;
+        else e = 1;
+        if (mant == 0) continue;
+        emin = std::min(emin, e - 150 + std::countr_zero(mant));
+        emax = std::max(emax, e - 150 + 32 - std::countl_zero(mant));
+    }
+    if (emax < emin) return 0;  // all zero
+    return emax - emin > 62 ? kNoUnit : emin;
+}
+
 void setPlane(Prim& prim) {
     const double ux = double(prim.p[1][0]) - double(prim.p[0][0]), uy = double(prim.p[1][1]) - double(prim.p[0][1]),
                  uz = double(prim.p[1][2]) - double(prim.p[0][2]);
@@ -399,6 +450,24 @@ void setPlane(Prim& prim) {
     prim.perm[0] = std::abs(m1) + std::abs(m2);
     prim.perm[1] = std::abs(m3) + std::abs(m4);
     prim.perm[2] = std::abs(m5) + std::abs(m6);
+    prim.unit = kNoUnit;
+    prim.ni[0] = prim.ni[1] = prim.ni[2] = 0;
+    const int32_t unit = integerUnit(&prim.p[0][0], 9);
+    if (unit == kNoUnit) return;
+    const double scale = pow2(-unit);
+    int64_t u[3], v[3];
+    constexpr int64_t kLimit = int64_t(1) << 30;
+    for (int k = 0; k < 3; ++k) {
+        const int64_t c0 = toUnit(prim.p[0][k], scale);
+        u[k] = toUnit(prim.p[1][k], scale) - c0;
+        v[k] = toUnit(prim.p[2][k], scale) - c0;
+        if (u[k] >= kLimit || u[k] <= -kLimit || v[k] >= kLimit || v[k] <= -kLimit) return;
+    }
+    // |components| < 2^61.
+    prim.ni[0] = u[1] * v[2] - u[2] * v[1];
+    prim.ni[1] = u[2] * v[0] - u[0] * v[2];
+    prim.ni[2] = u[0] * v[1] - u[1] * v[0];
+    prim.unit = unit;
 }
 
 Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
@@ -411,8 +480,13 @@ Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
                     break;
                 }
     if (shared == 2) {
-        // Not a fold-over unless b's opposite corner is on a's plane (faceContact's first test).
-        if (planeSide(a, b, 3 - sb[0] - sb[1]) != 0) return Contact::None;
+        // Not a fold-over unless b's opposite corner is on a's plane (faceContact's first test);
+        // then the two opposite corners strictly on one side of the edge (its second).
+        if (exactSide(a, b, 3 - sb[0] - sb[1]) != 0) return Contact::None;
+        const Vec3d e0 = corner(a, sa[0]), e1 = corner(a, sa[1]);
+        return coplanarOrientation(e0, e1, corner(a, 3 - sa[0] - sa[1]), corner(b, 3 - sb[0] - sb[1])) > 0
+                   ? Contact::Touching
+                   : Contact::None;
     } else if (shared == 1) {
         // b's opposite edge strictly on one side of a's plane: b meets a's plane only at the
         // shared vertex, which is on neither opposite edge: no contact elsewhere (and the same
@@ -427,11 +501,7 @@ Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
         const Vec3d& v = pa[sa[0]];
         const Vec3d &a1 = pa[(sa[0] + 1) % 3], &a2 = pa[(sa[0] + 2) % 3];
         const Vec3d b1 = corner(b, (sb[0] + 1) % 3), b2 = corner(b, (sb[0] + 2) % 3);
-        auto exactSide = [&](const Vec3d& q, int k) {
-            const int d = planeSide(a, b, k);
-            return d != 0 ? d : orient3d(pa[0], pa[1], pa[2], q);
-        };
-        if (exactSide(b1, (sb[0] + 1) % 3) == 0 && exactSide(b2, (sb[0] + 2) % 3) == 0) {
+        if (exactSide(a, b, (sb[0] + 1) % 3) == 0 && exactSide(a, b, (sb[0] + 2) % 3) == 0) {
             int i = 0, j = 1;
             coplanarFrame(pa, &i, &j);  // a (so b too, being coplanar) projects non-degenerately
             const int oa = orient2d(v, a1, a2, i, j), ob = orient2d(v, b1, b2, i, j);
