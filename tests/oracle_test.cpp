@@ -166,8 +166,8 @@ TEST(Oracle, BetweenObjectsIndicesDoNotShare) {
     EXPECT_EQ(t.pairs[0], (IntersectingPair{0, 0, 1, 0, T}));
 }
 
-// Random triangles in three objects: the Embree broad phase (with its float boxes) loses no pair
-// that the all-pairs loop finds, and invents none.
+// Random triangles in three objects: both broad phases (the grid and Embree, with their float
+// boxes) lose no pair that the all-pairs loop finds, and invent none.
 TEST(Oracle, BroadPhaseMatchesAllPairs) {
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> u(0, 1);
@@ -196,9 +196,13 @@ TEST(Oracle, BroadPhaseMatchesAllPairs) {
                     if (c != Contact::None)
                         expected.push_back({oa, ta, ob, tb, c == Contact::Crossing ? X : T});
                 }
-    const Truth t = findIntersections(scene);
     EXPECT_GT(expected.size(), 100u);
-    EXPECT_EQ(t.pairs, expected);
+    for (BroadPhase b : {BroadPhase::Grid, BroadPhase::Embree}) {
+        OracleOptions o;
+        o.broadPhase = b;
+        const Truth t = findIntersections(scene, o);
+        EXPECT_EQ(t.pairs, expected) << toString(b);
+    }
 }
 
 // Bad input is refused before it reaches Embree (which would drop it silently).
@@ -252,11 +256,14 @@ TEST(Oracle, ExactStageIsTheTruthRestrictedToThePcs) {
 }
 
 // Pair for pair against CGAL's self_intersections.
+// Both broad phases must give it.
 void expectSameAsCgal(const Mesh& mesh, const std::string& what, size_t expectedCount = 0) {
-    const Truth truth = findIntersections(sceneOf({mesh}));
-    const std::vector<FacePair> ours = selfPairsOf(truth, 0);
     const std::vector<FacePair> cgal = CgalSelfIntersections(mesh, what).run();
-    EXPECT_EQ(ours, cgal) << what;
+    for (BroadPhase b : {BroadPhase::Grid, BroadPhase::Embree}) {
+        OracleOptions o;
+        o.broadPhase = b;
+        EXPECT_EQ(selfPairsOf(findIntersections(sceneOf({mesh}), o), 0), cgal) << what << " (" << toString(b) << ")";
+    }
     if (expectedCount) {
         EXPECT_EQ(cgal.size(), expectedCount) << what;
     }

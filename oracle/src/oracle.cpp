@@ -50,7 +50,7 @@ struct Context {
 
 PairClass toClass(Contact c) { return c == Contact::Crossing ? PairClass::Crossing : PairClass::Touching; }
 
-// The narrow phase, called concurrently by Embree with batches of candidates.
+// The narrow phase, called concurrently by the broad phase with batches of candidates.
 void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
     Context& ctx = *static_cast<Context*>(user);
     Local& local = ctx.locals.local();
@@ -196,7 +196,9 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
 
     std::vector<std::vector<Box>> boxes(ctx.objects.size());
     for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = std::move(ctx.objects[o].boxes);
-    const detail::BroadPhaseTimes bt = detail::collideGrid(boxes, narrowPhase, &ctx);
+    const detail::BroadPhaseTimes bt = options.broadPhase == BroadPhase::Embree
+                                           ? detail::collideAll(boxes, narrowPhase, &ctx)
+                                           : detail::collideGrid(boxes, narrowPhase, &ctx);
     truth.buildSeconds = bt.buildSeconds;
     truth.collideSeconds = bt.collideSeconds;
 
@@ -217,6 +219,14 @@ const char* toString(PairClass c) { return c == PairClass::Crossing ? "crossing"
 
 size_t Truth::count(PairClass c) const {
     return size_t(std::count_if(pairs.begin(), pairs.end(), [c](const IntersectingPair& p) { return p.cls == c; }));
+}
+
+const char* toString(BroadPhase b) { return b == BroadPhase::Embree ? "embree" : "grid"; }
+
+BroadPhase parseBroadPhase(const std::string& text) {
+    if (text == "grid") return BroadPhase::Grid;
+    if (text == "embree") return BroadPhase::Embree;
+    throw InputError("option --broad-phase", "unknown broad phase '" + text + "' (expected grid or embree)");
 }
 
 Truth findIntersections(const Scene& scene, const OracleOptions& options) { return run(scene, options, nullptr); }

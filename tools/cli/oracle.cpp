@@ -30,6 +30,7 @@ struct OracleCommandOptions {
     long frame = -1;
     int threads = 0;
     bool weld = false;
+    std::string broadPhase = "grid";
 };
 
 int runOracle(const OracleCommandOptions& o) {
@@ -43,6 +44,7 @@ int runOracle(const OracleCommandOptions& o) {
     const size_t last = o.frame >= 0 ? size_t(o.frame) + 1 : animation.frameCount();
     oracle::OracleOptions options;
     options.weldByPosition = o.weld;
+    options.broadPhase = oracle::parseBroadPhase(o.broadPhase);
 
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
     for (size_t f = first; f < last; ++f) {
@@ -149,12 +151,14 @@ PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const Cu
 void addOracleCommand(CLI::App& app, Action& action) {
     auto o = std::make_shared<OracleCommandOptions>();
     CLI::App* sub = app.add_subcommand("oracle", "Find the truly intersecting triangle pairs of a scene, exactly "
-                                                  "(Embree broad phase, exact predicates), by class");
+                                                  "(grid or Embree broad phase, exact predicates), by class");
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
     sub->add_option("--json", o->json, "Write the pairs as [objectA, triA, objectB, triB, class] rows, sorted");
     sub->add_option("--frame", o->frame, "Only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
     sub->add_option("--threads", o->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));
     sub->add_flag("--weld", o->weld, "Treat bit-identical vertices of an object as one vertex (soups)");
+    sub->add_option("--broad-phase", o->broadPhase, "grid (ours, faster) | embree (Embree 3 rtcCollide); same pairs")
+        ->capture_default_str();
     sub->callback([o, &action] { action = [o] { return runOracle(*o); }; });
 }
 

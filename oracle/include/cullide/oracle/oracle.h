@@ -40,6 +40,7 @@
 #include <compare>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace cullide::oracle {
@@ -63,7 +64,16 @@ struct IntersectingPair {
     friend auto operator<=>(const IntersectingPair&, const IntersectingPair&) = default;
 };
 
+// Which broad phase finds the candidate pairs. Both give the same candidate set, hence the same
+// truth (tested): the uniform grid is ours and about 4x faster to build on bunny75k; Embree 3's
+// rtcCollide on user geometry is the well-kept library's, kept selectable as a cross-check.
+enum class BroadPhase : uint8_t { Grid, Embree };
+
+const char* toString(BroadPhase b);
+BroadPhase parseBroadPhase(const std::string& text);  // "grid" | "embree"; InputError
+
 struct OracleOptions {
+    BroadPhase broadPhase = BroadPhase::Grid;
     // Treat vertices of one object with bit-identical world positions as one vertex for the
     // sharing rules (for soups whose vertices are duplicated). Off: sharing is by index only,
     // as CGAL does, and triangles that meet at duplicated vertices are touching pairs.
