@@ -2,10 +2,10 @@
 // of ../shared/papers/000_7db8250a290ddd48.txt, on any DepthBackend. See cullide.h.
 #include "cullide/cullide.h"
 
-#include "cullide/error.h"
-#include "cullide/parallel.h"
 #include "reliable.h"
 
+#include "cullide/error.h"
+#include "cullide/parallel.h"
 
 #include <algorithm>
 #include <chrono>
