@@ -225,8 +225,9 @@ TEST(Cli, PruneJsonAndPly) {
         const auto& passes = frame.at("passes");
         ASSERT_GT(passes.size(), 1u);
         for (size_t i = 1; i < passes.size(); ++i)
-            if (passes[i].at("level") == passes[i - 1].at("level"))
+            if (passes[i].at("level") == passes[i - 1].at("level")) {
                 EXPECT_EQ(passes[i].at("triangles_in"), passes[i - 1].at("triangles_out"));
+            }
         EXPECT_EQ(passes.back().at("triangles_out").get<size_t>(), list.size());
         pcs[threads - 1] = list.dump();
     }

@@ -131,7 +131,11 @@ std::set<PcsTriangle> crossingTriangles(const Scene& scene) {
 Scene sceneOf(std::initializer_list<std::pair<Mesh, Transform>> objects) {
     Scene s;
     int i = 0;
-    for (const auto& [mesh, t] : objects) s.objects.push_back({"o" + std::to_string(i++), mesh, t});
+    for (const auto& [mesh, t] : objects) {
+        std::string name = "o";  // (not "o" + to_string(): GCC 12 warns falsely, -Wrestrict)
+        name += std::to_string(i++);
+        s.objects.push_back({name, mesh, t});
+    }
     return s;
 }
 

@@ -151,7 +151,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"bad/fewer_faces_than_header.off", "ends before face 1"}),
     // Stable, readable names (the default prints the pointers, which change with ASLR and make
     // CTest's discovered names miss the tests).
-    [](const auto& info) { return cullide::test::paramName(info.param.file); });
+    [](const auto& param) { return cullide::test::paramName(param.param.file); });
 
 // Trap: a lying header count must not make the reader allocate for it (or loop over it).
 TEST(MeshIo, HugeHeaderCountsFailFastWithoutAllocating) {

@@ -16,7 +16,7 @@ namespace {
 // 0's face with one corner. Object 3: far away, touching nothing.
 Scene crossingScene() {
     Scene s;
-    auto add = [&](std::vector<Vec3f> p) { s.objects.push_back({"o" + std::to_string(s.objects.size()), Mesh{std::move(p), {{0, 1, 2}}}, Transform::Identity()}); };
+    auto add = [&](std::vector<Vec3f> p) { s.objects.push_back({std::string("o").append(std::to_string(s.objects.size())), Mesh{std::move(p), {{0, 1, 2}}}, Transform::Identity()}); };
     add({{-1, -1, 0}, {3, -1, 0}, {-1, 3, 0}});
     add({{-0.5f, 0, -0.5f}, {0.5f, -0.5f, 0.5f}, {0.5f, 0.5f, 0.5f}});
     add({{1, 1, 0}, {1.5f, 1, 1}, {1, 1.5f, 1}});

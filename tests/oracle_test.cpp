@@ -22,7 +22,7 @@ namespace {
 
 Scene sceneOf(std::vector<Mesh> meshes) {
     Scene s;
-    for (size_t i = 0; i < meshes.size(); ++i) s.objects.push_back({"m" + std::to_string(i), std::move(meshes[i]), Transform::Identity()});
+    for (size_t i = 0; i < meshes.size(); ++i) s.objects.push_back({std::string("m").append(std::to_string(i)), std::move(meshes[i]), Transform::Identity()});
     return s;
 }
 

@@ -89,7 +89,11 @@ Mesh selfCrossingRibbon(int segments) {
 Scene sceneOf(std::initializer_list<std::pair<Mesh, Transform>> objects) {
     Scene s;
     int i = 0;
-    for (const auto& [mesh, t] : objects) s.objects.push_back({"o" + std::to_string(i++), mesh, t});
+    for (const auto& [mesh, t] : objects) {
+        std::string name = "o";  // (not "o" + to_string(): GCC 12 warns falsely, -Wrestrict)
+        name += std::to_string(i++);
+        s.objects.push_back({name, mesh, t});
+    }
     return s;
 }
 
@@ -252,8 +256,9 @@ TEST(ReliableMethod, SelfCrossingRibbonsAreKeptAndTheRestPruned) {
             const Outcome r = reliable(s, res, f, 4);
             ASSERT_GT(r.report.collidingTriangles, 0u);
             EXPECT_EQ(r.report.falsePruneCount(), 0u) << res << " " << f.name() << ": " << describe(r.report);
-            if (res == 256 && f == DepthFormat::unorm(24))
+            if (res == 256 && f == DepthFormat::unorm(24)) {
                 EXPECT_LT(r.result.pcs.size(), s.triangleCount() / 2) << "the PCS should stay useful";
+            }
         }
 }
 

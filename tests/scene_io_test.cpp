@@ -100,7 +100,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadScene{"bad/nan.off", "non-finite"}),
     // Stable, readable names (the default prints the pointers, which change with ASLR and make
     // CTest's discovered names miss the tests).
-    [](const auto& info) { return cullide::test::paramName(info.param.file); });
+    [](const auto& param) { return cullide::test::paramName(param.param.file); });
 
 // Trap: writeScene output that does not load back to the same animation (bit for bit: meshes,
 // transforms, per-frame positions), or whose bytes differ between two writes.

@@ -203,7 +203,9 @@ TEST(StudyStability, PenetrationAtLeastOneStoredStepIsDetected) {
             ++guaranteed;
             EXPECT_EQ(r["detected"], 1) << r;
         }
-        if (r["factor"].get<double>() >= 1.5) EXPECT_EQ(r["detected"], 1) << r;
+        if (r["factor"].get<double>() >= 1.5) {
+            EXPECT_EQ(r["detected"], 1) << r;
+        }
         if (r["factor"].get<double>() <= 0.5 && r["detected"] == 0) {
             ++shallowMissed;
             EXPECT_GT(r["fp_depth_rounding"].get<size_t>(), 0u) << r;
@@ -223,7 +225,9 @@ TEST(StudyStability, TiltEdgeOnLossesAreAttributed) {
     const auto rows = tiltSweep(o, {30.0, 60.0, 90.0}, {"z", "axes"});
     EXPECT_EQ(sumOf(rows, "fp_unexplained"), 0u);
     for (const auto& r : rows) {
-        if (r["directions"] == "z" && r["angle"].get<double>() < 70) EXPECT_EQ(r["detected"], 1) << r;
+        if (r["directions"] == "z" && r["angle"].get<double>() < 70) {
+            EXPECT_EQ(r["detected"], 1) << r;
+        }
         if (r["directions"] == "z" && r["angle"].get<double>() == 90) {
             EXPECT_EQ(r["detected"], 0) << r;
             EXPECT_GT(r["fp_edge_on"].get<size_t>(), 0u) << r;
@@ -245,7 +249,9 @@ TEST(StudyStability, SmallOverlapsAreLostToSampling) {
     EXPECT_EQ(sumOf(rows, "fp_depth_rounding"), 0u);
     size_t smallMissed = 0;
     for (const auto& r : rows) {
-        if (r["size"].get<double>() == 3.0) EXPECT_EQ(r["detected"], 1) << r;
+        if (r["size"].get<double>() == 3.0) {
+            EXPECT_EQ(r["detected"], 1) << r;
+        }
         if (r["size"].get<double>() == 0.1 && r["detected"] == 0) ++smallMissed;
     }
     EXPECT_GT(smallMissed, 4u);
@@ -266,7 +272,9 @@ TEST(StudyStability, JitterKeepsEveryFalsePruneExplained) {
         // The original method never tests an object against itself: the bunny is pruned whole.
         if (r["method"] == "modified") EXPECT_GT(r["pcs"].get<size_t>(), 0u) << r;
         else EXPECT_EQ(r["false_prunes"], r["fp_untested"]) << r;
-        if (r["kind"] == "perturb" && r["magnitude"].get<double>() == 1e-7) EXPECT_GT(r["oracle_pairs"].get<size_t>(), 0u);
+        if (r["kind"] == "perturb" && r["magnitude"].get<double>() == 1e-7) {
+            EXPECT_GT(r["oracle_pairs"].get<size_t>(), 0u);
+        }
     }
 }
 
