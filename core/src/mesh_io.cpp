@@ -22,11 +22,11 @@
 #include "cullide/mesh_io.h"
 
 #include "cullide/error.h"
+#include "cullide/file_io.h"
 
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
-#include <atomic>
 #include <bit>
 #include <cctype>
 #include <cerrno>
@@ -38,7 +38,6 @@
 #include <map>
 #include <sstream>
 #include <string_view>
-#include <unistd.h>
 
 namespace cullide {
 namespace {
@@ -820,29 +819,6 @@ Mesh readStl(const std::string& src, std::string_view data) {
 // ---------------------------------------------------------------------------------------------
 // Writing: build the bytes, write them to a temporary file beside the target, rename.
 
-void writeAtomically(const fs::path& path, const std::string& bytes) {
-    static std::atomic<unsigned> counter{0};
-    const std::string src = path.string();
-    fs::path tmp = path;
-    tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
-    std::FILE* f = std::fopen(tmp.string().c_str(), "wb");
-    if (!f) throw InputError(src, std::string("cannot write: ") + std::strerror(errno));
-    const bool wrote = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-    const int writeErrno = errno;
-    const bool closed = std::fclose(f) == 0;
-    std::error_code ec;
-    if (!wrote || !closed) {
-        fs::remove(tmp, ec);
-        throw InputError(src, std::string("cannot write: ") + std::strerror(wrote ? errno : writeErrno));
-    }
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        std::error_code ignored;
-        fs::remove(tmp, ignored);
-        throw InputError(src, "cannot write: " + ec.message());
-    }
-}
-
 void appendFloat(std::string& out, float x) {
     char buf[32];
     const auto r = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::general, 9);  // == %.9g
@@ -934,7 +910,7 @@ void writePly(const Mesh& mesh, const fs::path& path, const PlyWriteOptions& opt
             out += '\n';
         }
     }
-    writeAtomically(path, out);
+    writeFileAtomically(path, out);
 }
 
 void writeOff(const Mesh& mesh, const fs::path& path) {
@@ -954,7 +930,7 @@ void writeOff(const Mesh& mesh, const fs::path& path) {
         for (uint32_t v : t) { out += ' '; appendUint(out, v); }
         out += '\n';
     }
-    writeAtomically(path, out);
+    writeFileAtomically(path, out);
 }
 
 }  // namespace cullide

@@ -9,11 +9,11 @@
 #include "cullide/scene_io.h"
 
 #include "cullide/error.h"
+#include "cullide/file_io.h"
 #include "cullide/mesh_io.h"
 
 #include <nlohmann/json.hpp>
 
-#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -21,7 +21,6 @@
 #include <map>
 #include <numbers>
 #include <set>
-#include <unistd.h>
 
 namespace cullide {
 namespace {
@@ -267,27 +266,6 @@ bool isMeshExtension(const fs::path& p) {
     }
 }
 
-void writeTextAtomically(const fs::path& path, const std::string& text) {
-    static std::atomic<unsigned> counter{0};
-    const std::string src = path.string();
-    fs::path tmp = path;
-    tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
-    std::FILE* f = std::fopen(tmp.string().c_str(), "wb");
-    if (!f) throw InputError(src, std::string("cannot write: ") + std::strerror(errno));
-    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-    const bool closed = std::fclose(f) == 0;
-    std::error_code ec;
-    if (!ok || !closed) {
-        fs::remove(tmp, ec);
-        throw InputError(src, "cannot write: I/O error");
-    }
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        std::error_code ignored;
-        fs::remove(tmp, ignored);
-        throw InputError(src, "cannot write: " + ec.message());
-    }
-}
 
 OrderedJson transformJson(const Transform& t) {
     OrderedJson rows = OrderedJson::array();
@@ -377,7 +355,7 @@ void writeScene(const Animation& animation, const fs::path& path) {
         }
         root["animation"]["frames"] = std::move(frames);
     }
-    writeTextAtomically(path, root.dump(2) + "\n");
+    writeFileAtomically(path, root.dump(2) + "\n");
 }
 
 }  // namespace cullide

@@ -3,9 +3,9 @@
 // sorted, degenerate triangles as [object, tri, object, tri, "degenerate"] (CGAL's (f, f)).
 #include "commands.h"
 #include "oracle_check.h"
-#include "output.h"
 
 #include "cullide/error.h"
+#include "cullide/file_io.h"
 #include "cullide/oracle/measures.h"
 #include "cullide/oracle/oracle.h"
 #include "cullide/scene_io.h"

@@ -2,12 +2,12 @@
 // the seed paper's self-intersection variant, with per-pass statistics.
 #include "commands.h"
 #include "oracle_check.h"
-#include "output.h"
 #include "pictures.h"
 #include "study.h"
 
 #include "cullide/cullide.h"
 #include "cullide/error.h"
+#include "cullide/file_io.h"
 #include "cullide/mesh_io.h"
 #include "cullide/scene_io.h"
 

@@ -2,9 +2,9 @@
 // attributed to causes), their shards and merging, and the stability sweeps. The engine is in
 // tools/study/ (study.h, causes.h, probes.h); the rules are in docs/studies.md.
 #include "commands.h"
-#include "output.h"
 
 #include "cullide/error.h"
+#include "cullide/file_io.h"
 #include "probes.h"
 #include "study.h"
 

@@ -1,0 +1,41 @@
+// Output files, all or nothing (see file_io.h).
+#include "cullide/file_io.h"
+
+#include "cullide/error.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+namespace cullide {
+
+namespace fs = std::filesystem;
+
+void writeFileAtomically(const fs::path& path, std::string_view bytes) {
+    static std::atomic<unsigned> counter{0};
+    const std::string src = path.string();
+    fs::path tmp = path;
+    tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+    std::FILE* f = std::fopen(tmp.string().c_str(), "wb");
+    if (!f) throw InputError(src, std::string("cannot write: ") + std::strerror(errno));
+    const bool wrote = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+    const int writeErrno = errno;
+    const bool closed = std::fclose(f) == 0;
+    std::error_code ec;
+    if (!wrote || !closed) {
+        fs::remove(tmp, ec);
+        throw InputError(src, std::string("cannot write: ") + std::strerror(wrote ? errno : writeErrno));
+    }
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        std::error_code ignored;
+        fs::remove(tmp, ignored);
+        throw InputError(src, "cannot write: " + ec.message());
+    }
+}
+
+}  // namespace cullide
