@@ -21,6 +21,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "bench_util.h"
+
 #include <chrono>
 #include <limits>
 #include <map>
@@ -58,38 +60,6 @@ const Mesh& benchMesh(int which) {
         m = loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/bunny75k.off");
     }
     return cache.emplace(which, std::move(m)).first->second;
-}
-
-// The self variant's reducePCS (Figure 3), both passes, one direction, as one command list
-// (the same list as raster_bench.cpp's BM_ReducePcs).
-CommandList reducePcsList(uint32_t triangles, uint32_t perObject) {
-    if (perObject == 0) perObject = triangles;
-    std::vector<std::pair<uint32_t, uint32_t>> objects;
-    for (uint32_t f = 0; f < triangles; f += perObject) objects.push_back({f, std::min(perObject, triangles - f)});
-    CommandList l;
-    l.clear(1.0);
-    for (const auto& [first, count] : objects) {
-        l.depthMask(true);
-        l.depthFunc(DepthFunc::Less);
-        l.draw(first, count);
-        l.depthMask(false);
-        l.depthFunc(DepthFunc::Greater);
-        l.beginQuery();
-        l.draw(first, count);
-        l.endQuery();
-    }
-    l.clear(1.0);
-    for (auto it = objects.rbegin(); it != objects.rend(); ++it) {
-        l.depthMask(false);
-        l.depthFunc(DepthFunc::Greater);
-        l.beginQuery();
-        l.draw(it->first, it->second);
-        l.endQuery();
-        l.depthMask(true);
-        l.depthFunc(DepthFunc::Less);
-        l.draw(it->first, it->second);
-    }
-    return l;
 }
 
 void report(benchmark::State& state, double cpuMs, double glMs) {
