@@ -2,6 +2,11 @@
 #pragma once
 
 #include "cullide/depth_backend.h"
+#include "cullide/generators.h"
+#include "cullide/mesh_io.h"
+
+#include <map>
+#include <string>
 
 #include <algorithm>
 #include <utility>
@@ -38,4 +43,20 @@ inline cullide::CommandList reducePcsList(uint32_t triangles, uint32_t perObject
         l.draw(it->first, it->second);
     }
     return l;
+}
+
+// The benchmark meshes, loaded once: 0 = the cow subdivided 1-to-4 three times (371,456
+// triangles), 1 = the 75k bunny.
+inline const cullide::Mesh& benchMesh(int which) {
+    static std::map<int, cullide::Mesh> cache;
+    auto it = cache.find(which);
+    if (it != cache.end()) return it->second;
+    cullide::Mesh m;
+    if (which == 0) {
+        m = cullide::loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/cow.off");
+        for (int k = 0; k < 3; ++k) m = cullide::subdivide(m);
+    } else {
+        m = cullide::loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/bunny75k.off");
+    }
+    return cache.emplace(which, std::move(m)).first->second;
 }

@@ -48,19 +48,6 @@ raster::GlBackend* sharedGl(std::string& why) {
     return gl.get();
 }
 
-const Mesh& benchMesh(int which) {
-    static std::map<int, Mesh> cache;
-    auto it = cache.find(which);
-    if (it != cache.end()) return it->second;
-    Mesh m;
-    if (which == 0) {
-        m = loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/cow.off");
-        for (int k = 0; k < 3; ++k) m = subdivide(m);
-    } else {
-        m = loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/bunny75k.off");
-    }
-    return cache.emplace(which, std::move(m)).first->second;
-}
 
 void report(benchmark::State& state, double cpuMs, double glMs) {
     state.counters["cpu_ms"] = cpuMs;

@@ -84,19 +84,6 @@ BENCHMARK(BM_Triangles)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-const Mesh& benchMesh(int which) {
-    static std::map<int, Mesh> cache;
-    auto it = cache.find(which);
-    if (it != cache.end()) return it->second;
-    Mesh m;
-    if (which == 0) {
-        m = loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/cow.off");
-        for (int k = 0; k < 3; ++k) m = subdivide(m);
-    } else {
-        m = loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/bunny75k.off");
-    }
-    return cache.emplace(which, std::move(m)).first->second;
-}
 
 // Orthographic view along +z fitted to the mesh's bounds, with a 1% margin on every side (so
 // no vertex lands exactly on the far plane and gets clipped by rounding).

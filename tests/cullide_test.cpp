@@ -4,6 +4,8 @@
 #include "cullide/error.h"
 #include "cullide/raster/cpu_backend.h"
 
+#include "test_util.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -15,29 +17,12 @@
 #include <set>
 
 using namespace cullide;
+using cullide::test::box;
+using cullide::test::rotation;
 
 namespace {
 
-Transform rotation(double ax, double ay, double az, const Vec3f& translation = Vec3f::Zero()) {
-    Transform t = Transform::Identity();
-    t.translate(translation);
-    t.rotate(Eigen::AngleAxisf(float(az), Vec3f::UnitZ()) * Eigen::AngleAxisf(float(ay), Vec3f::UnitY()) *
-             Eigen::AngleAxisf(float(ax), Vec3f::UnitX()));
-    return t;
-}
 
-// A closed box [lo, hi] of 12 triangles (outward winding; winding does not matter to Cullide).
-Mesh box(const Vec3f& lo, const Vec3f& hi) {
-    Mesh m;
-    for (int i = 0; i < 8; ++i)
-        m.positions.push_back(Vec3f(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z()));
-    const uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& f : q) {
-        m.triangles.push_back({f[0], f[1], f[2]});
-        m.triangles.push_back({f[0], f[2], f[3]});
-    }
-    return m;
-}
 
 // A unit icosphere subdivided `levels` times (20 * 4^levels triangles), closed, no self-intersection.
 Mesh icosphere(int levels) {

@@ -15,6 +15,8 @@
 
 #include "../core/src/reliable.h"
 
+#include "test_util.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -24,28 +26,11 @@
 #include <random>
 
 using namespace cullide;
+using cullide::test::box;
 
 namespace {
 
-Transform pose(double ax, double ay, double az, const Vec3f& translation = Vec3f::Zero()) {
-    Transform t = Transform::Identity();
-    t.translate(translation);
-    t.rotate(Eigen::AngleAxisf(float(az), Vec3f::UnitZ()) * Eigen::AngleAxisf(float(ay), Vec3f::UnitY()) *
-             Eigen::AngleAxisf(float(ax), Vec3f::UnitX()));
-    return t;
-}
 
-Mesh box(const Vec3f& lo, const Vec3f& hi) {
-    Mesh m;
-    for (int i = 0; i < 8; ++i)
-        m.positions.push_back(Vec3f(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z()));
-    const uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& f : q) {
-        m.triangles.push_back({f[0], f[1], f[2]});
-        m.triangles.push_back({f[0], f[2], f[3]});
-    }
-    return m;
-}
 
 // A UV sphere (closed, no self-intersection).
 Mesh sphere(int rings, int sectors, float r = 1) {
@@ -228,7 +213,7 @@ TEST(ReliableMethod, TouchingContactsAreKept) {
                                       {box(Vec3f(0.3f, 0.2f, 1), Vec3f(1.5f, 1.4f, 2)), Transform::Identity()}});
     const Scene tilted = sceneOf({{box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), Transform::Identity()},
                                   {box(Vec3f(-0.5f, -0.5f, -0.5f), Vec3f(0.5f, 0.5f, 0.5f)),
-                                   pose(0.3, 0.5, 0.1, Vec3f(3, 3, 3))}});
+                                   test::rotation(0.3, 0.5, 0.1, Vec3f(3, 3, 3))}});
     // The second box's lowest vertex moved to rest exactly on the first box's top face is hard to
     // make in float; a box sharing the first one's corner position exactly is a vertex contact.
     const Scene corner = sceneOf({{box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), Transform::Identity()},
@@ -250,7 +235,7 @@ TEST(ReliableMethod, TouchingContactsAreKept) {
 // lies between non-adjacent units of one object, and the mesh's own adjacency must not keep
 // everything.
 TEST(ReliableMethod, SelfCrossingRibbonsAreKeptAndTheRestPruned) {
-    const Scene s = sceneOf({{selfCrossingRibbon(120), pose(0.31, 0.47, 0.23)}});
+    const Scene s = sceneOf({{selfCrossingRibbon(120), test::rotation(0.31, 0.47, 0.23)}});
     for (int res : {16, 64, 256})
         for (const DepthFormat& f : allFormats()) {
             const Outcome r = reliable(s, res, f, 4);
@@ -265,7 +250,7 @@ TEST(ReliableMethod, SelfCrossingRibbonsAreKeptAndTheRestPruned) {
 // Trap: two spheres far apart, and a sphere alone (closed surface: every unit sees units behind it
 // in every direction): nothing intersects, and the PCS must become empty at a fair resolution.
 TEST(ReliableMethod, SeparatedClosedSurfacesArePruned) {
-    const Scene s = sceneOf({{sphere(16, 24), Transform::Identity()}, {sphere(16, 24), pose(0.1, 0.2, 0.3, Vec3f(3, 0.5f, 0))}});
+    const Scene s = sceneOf({{sphere(16, 24), Transform::Identity()}, {sphere(16, 24), test::rotation(0.1, 0.2, 0.3, Vec3f(3, 0.5f, 0))}});
     const Outcome r = reliable(s, 256, DepthFormat::unorm(24), 8);
     EXPECT_EQ(r.report.collidingTriangles, 0u);
     EXPECT_TRUE(r.result.pcs.empty()) << r.result.pcs.size() << " of " << s.triangleCount();
@@ -318,7 +303,7 @@ TEST(ReliableAcceptance, ZeroFalsePrunesUnderRandomRotationsAndDirections) {
     for (int trial = 0; trial < 6; ++trial) {
         const SceneCase& c = scenes[size_t(trial) % scenes.size()];
         Scene s = c.scene;
-        const Transform t = pose(angle(rng), angle(rng), angle(rng), Vec3f(0.1f, -0.2f, 0.3f));
+        const Transform t = test::rotation(angle(rng), angle(rng), angle(rng), Vec3f(0.1f, -0.2f, 0.3f));
         for (Object& o : s.objects) o.transform = t * o.transform;
         const int res = trial % 2 ? 48 : 128;
         const DepthFormat f = allFormats()[size_t(trial) % allFormats().size()];
@@ -342,8 +327,8 @@ TEST(ReliableAcceptance, ZeroFalsePrunesOnBundledScenes) {
 // Same scene and options: the same PCS and the same per-pass counts for 1, 2 and 4 threads.
 TEST(ReliableMethod, DeterministicAcrossThreads) {
     const Scene s = sceneOf({{sphere(10, 14), Transform::Identity()},
-                             {sphere(10, 14), pose(0.1, 0.2, 0.3, Vec3f(1.3f, 0.2f, 0))},
-                             {selfCrossingRibbon(60), pose(0.31, 0.47, 0.23, Vec3f(0.5f, 0, 0))}});
+                             {sphere(10, 14), test::rotation(0.1, 0.2, 0.3, Vec3f(1.3f, 0.2f, 0))},
+                             {selfCrossingRibbon(60), test::rotation(0.31, 0.47, 0.23, Vec3f(0.5f, 0, 0))}});
     const Outcome one = reliable(s, 96, DepthFormat::unorm(24), 8, axisDirections(), 1);
     for (int threads : {2, 4}) {
         const Outcome r = reliable(s, 96, DepthFormat::unorm(24), 8, axisDirections(), threads);

@@ -38,3 +38,27 @@ std::string paramName(const std::string& path) {
 }
 
 }  // namespace cullide::test
+
+namespace cullide::test {
+
+Mesh box(const Vec3f& lo, const Vec3f& hi) {
+    Mesh m;
+    for (int i = 0; i < 8; ++i)
+        m.positions.push_back(Vec3f(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z()));
+    const uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& f : q) {
+        m.triangles.push_back({f[0], f[1], f[2]});
+        m.triangles.push_back({f[0], f[2], f[3]});
+    }
+    return m;
+}
+
+Transform rotation(double ax, double ay, double az, const Vec3f& translation) {
+    Transform t = Transform::Identity();
+    t.translate(translation);
+    t.rotate(Eigen::AngleAxisf(float(az), Vec3f::UnitZ()) * Eigen::AngleAxisf(float(ay), Vec3f::UnitY()) *
+             Eigen::AngleAxisf(float(ax), Vec3f::UnitX()));
+    return t;
+}
+
+}  // namespace cullide::test

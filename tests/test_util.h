@@ -1,6 +1,8 @@
 // Helpers shared by the test files: where the test data is, and scratch folders.
 #pragma once
 
+#include "cullide/scene.h"
+
 #include <filesystem>
 #include <string>
 
@@ -8,6 +10,12 @@ namespace cullide::test {
 
 // CULLIDE_TEST_DATA_DIR "/" relative, e.g. testData("good/polys.off").
 std::string testData(const char* relative);
+
+// A closed box [lo, hi] of 12 triangles (two per face).
+Mesh box(const Vec3f& lo, const Vec3f& hi);
+
+// Rotation about x, then y, then z (radians), then the translation.
+Transform rotation(double ax, double ay, double az, const Vec3f& translation = Vec3f::Zero());
 
 // A test-name-safe form of a data file's path ("bad/nan.off" -> "bad_nan_off"), for
 // parameterized tests' names.
