@@ -29,7 +29,7 @@ char buildToken, collideBefore, collideAfter;
 
 void boundsFn(const RTCBoundsFunctionArguments* args) {
     tsanAcquire(&buildToken);
-    const Box& b = static_cast<const std::vector<Box>*>(args->geometryUserPtr)->data()[args->primID];
+    const Box& b = (*static_cast<const std::span<const Box>*>(args->geometryUserPtr))[args->primID];
     RTCBounds* o = args->bounds_o;
     o->lower_x = b.lo[0], o->lower_y = b.lo[1], o->lower_z = b.lo[2];
     o->upper_x = b.hi[0], o->upper_y = b.hi[1], o->upper_z = b.hi[2];
@@ -62,7 +62,7 @@ double seconds(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
-BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateFn fn, void* user) {
+BroadPhaseTimes collideAll(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user) {
     BroadPhaseTimes times;
     auto t0 = std::chrono::steady_clock::now();
     // One device for the process (creating one costs milliseconds; a device is thread-safe and
@@ -79,7 +79,7 @@ BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateF
     for (size_t i = 0; i < objects.size(); ++i) {
         RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
         rtcSetGeometryUserPrimitiveCount(g, unsigned(objects[i].size()));
-        rtcSetGeometryUserData(g, const_cast<std::vector<Box>*>(&objects[i]));
+        rtcSetGeometryUserData(g, const_cast<std::span<const Box>*>(&objects[i]));
         rtcSetGeometryBoundsFunction(g, boundsFn, nullptr);
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(scene.get(), g, unsigned(i));

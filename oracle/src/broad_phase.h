@@ -30,7 +30,7 @@ struct BroadPhaseTimes {
 // unordered pair in both orders and never (p, p); the callback must filter. Boxes must be
 // finite with lo <= hi and |coordinates| < 2^60 (the caller validates). Throws
 // std::runtime_error on an Embree error (a bug or out of memory).
-BroadPhaseTimes collideAll(std::span<const std::vector<Box>> objects, CandidateFn fn, void* user);
+BroadPhaseTimes collideAll(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user);
 
 // Sorts v[0, n) by the bits [32, 32 + keyBits) of each value (LSD radix, stable: values equal
 // there keep their order), using tmp[0, n) as scratch; returns whichever holds the result.
@@ -38,6 +38,6 @@ uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits);
 
 // The same pairs from a uniform grid (broad_phase_grid.cpp), each unordered pair once, as
 // (object0, prim0) < (object1, prim1). Throws std::bad_alloc only.
-BroadPhaseTimes collideGrid(std::span<const std::vector<Box>> objects, CandidateFn fn, void* user);
+BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user);
 
 }  // namespace cullide::oracle::detail

@@ -29,6 +29,7 @@ bool overlap(const Box& a, const Box& b) {
 
 constexpr uint32_t kMaxCellsPerBox = 64;  // beyond: tested against every box
 constexpr size_t kBatch = 1024;            // candidates handed to the callback at once
+constexpr size_t kChunk = 256;             // a box's partners in a cell tested between flushes
 
 struct Grid {
     double origin[3];
@@ -45,56 +46,106 @@ struct Grid {
 
 uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits) {
     const int passes = (keyBits + 7) / 8;
-    std::vector<size_t> count(size_t(passes) * 256, 0);
-    for (size_t i = 0; i < n; ++i)
-        for (int p = 0; p < passes; ++p) ++count[size_t(p) * 256 + ((v[i] >> (32 + 8 * p)) & 0xff)];
-    for (int p = 0; p < passes; ++p) {
-        size_t* c = count.data() + size_t(p) * 256;
-        size_t sum = 0;
-        for (int d = 0; d < 256; ++d) {
-            const size_t k = c[d];
-            c[d] = sum;
+    if (passes == 0 || n < 2) return v;
+    // The top digit first (MSD, in parallel over fixed blocks of the input: per-block counts,
+    // then each block scatters to its own slots, so the pass is stable), then each of the 256
+    // buckets on its own (LSD on the lower digits, stable, in cache): a stable sort on the
+    // whole key whatever the thread count.
+    constexpr size_t kBlock = size_t(1) << 15;
+    const size_t blocks = (n + kBlock - 1) / kBlock;
+    const int top = 32 + 8 * (passes - 1);
+    std::vector<size_t> count(blocks * 256, 0);
+    parallelForEach(0, blocks, [&](size_t b) {
+        size_t* c = count.data() + b * 256;
+        for (size_t i = b * kBlock, e = std::min(n, i + kBlock); i < e; ++i) ++c[(v[i] >> top) & 0xff];
+    });
+    std::array<size_t, 257> bucket{};
+    size_t sum = 0;
+    for (size_t d = 0; d < 256; ++d) {
+        bucket[d] = sum;
+        for (size_t b = 0; b < blocks; ++b) {
+            const size_t k = count[b * 256 + d];
+            count[b * 256 + d] = sum;
             sum += k;
         }
-        const int shift = 32 + 8 * p;
-        for (size_t i = 0; i < n; ++i) tmp[c[(v[i] >> shift) & 0xff]++] = v[i];
-        std::swap(v, tmp);
     }
-    return v;
+    bucket[256] = n;
+    parallelForEach(0, blocks, [&](size_t b) {
+        size_t* c = count.data() + b * 256;
+        for (size_t i = b * kBlock, e = std::min(n, i + kBlock); i < e; ++i) tmp[c[(v[i] >> top) & 0xff]++] = v[i];
+    });
+    if (passes == 1) return tmp;
+    // Every bucket takes passes - 1 more passes between tmp and v, so all end in the same array.
+    parallelForEach(0, 256, [&](size_t d) {
+        uint64_t* from = tmp + bucket[d];
+        uint64_t* to = v + bucket[d];
+        const size_t m = bucket[d + 1] - bucket[d];
+        for (int p = 0; p + 1 < passes; ++p) {
+            const int shift = 32 + 8 * p;
+            size_t c[256] = {};
+            for (size_t i = 0; i < m; ++i) ++c[(from[i] >> shift) & 0xff];
+            size_t at = 0;
+            for (size_t& k : c) {
+                const size_t x = k;
+                k = at;
+                at += x;
+            }
+            for (size_t i = 0; i < m; ++i) to[c[(from[i] >> shift) & 0xff]++] = from[i];
+            std::swap(from, to);
+        }
+    });
+    return passes % 2 == 1 ? tmp : v;
 }
 
-BroadPhaseTimes collideGrid(std::span<const std::vector<Box>> objects, CandidateFn fn, void* user) {
+BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user) {
     BroadPhaseTimes times;
     auto t0 = std::chrono::steady_clock::now();
     // Global index g: objects one after another, primitives in order, so that g ascending is
-    // (object, primitive) ascending.
+    // (object, primitive) ascending. One object (self-intersection): its boxes as they are.
     std::vector<size_t> offset(objects.size() + 1, 0);
     for (size_t o = 0; o < objects.size(); ++o) offset[o + 1] = offset[o] + objects[o].size();
     const size_t n = offset.back();
     if (n == 0) return times;
-    std::vector<Box> boxes(n);
-    std::vector<uint32_t> objectOf(n);
-    for (size_t o = 0; o < objects.size(); ++o) {
-        std::copy(objects[o].begin(), objects[o].end(), boxes.begin() + std::ptrdiff_t(offset[o]));
-        std::fill(objectOf.begin() + std::ptrdiff_t(offset[o]), objectOf.begin() + std::ptrdiff_t(offset[o + 1]), uint32_t(o));
+    std::vector<Box> joined;
+    std::vector<uint32_t> objectOf;
+    if (objects.size() > 1) {
+        joined.resize(n);
+        objectOf.resize(n);
+        for (size_t o = 0; o < objects.size(); ++o) {
+            std::copy(objects[o].begin(), objects[o].end(), joined.begin() + std::ptrdiff_t(offset[o]));
+            std::fill(objectOf.begin() + std::ptrdiff_t(offset[o]), objectOf.begin() + std::ptrdiff_t(offset[o + 1]), uint32_t(o));
+        }
     }
+    const std::span<const Box> boxes = objects.size() > 1 ? std::span<const Box>(joined) : objects[0];
     auto candidate = [&](size_t a, size_t b) {  // a < b
+        if (objectOf.empty()) return Candidate{0, uint32_t(a), 0, uint32_t(b)};
         const uint32_t oa = objectOf[a], ob = objectOf[b];
         return Candidate{oa, uint32_t(a - offset[oa]), ob, uint32_t(b - offset[ob])};
     };
 
-    // The grid: cells about the median box's largest extent; at most 2^32 cells.
+    // The grid: cells about the median box's largest extent; at most 2^32 cells. Bounds per
+    // fixed block, then combined in block order (min/max: the same whatever the threads).
+    constexpr size_t kBlock = 16384;
+    const size_t blocks = (n + kBlock - 1) / kBlock;
+    std::vector<std::array<double, 6>> blockBounds(blocks);
+    std::unique_ptr<float[]> extent(new float[n]);
+    parallelForEach(0, blocks, [&](size_t blk) {
+        std::array<double, 6> bb{1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
+        for (size_t g = blk * kBlock, e = std::min(n, g + kBlock); g < e; ++g) {
+            const Box& b = boxes[g];
+            for (int k = 0; k < 3; ++k) bb[k] = std::min(bb[k], double(b.lo[k])), bb[3 + k] = std::max(bb[3 + k], double(b.hi[k]));
+            extent[g] = std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
+        }
+        blockBounds[blk] = bb;
+    });
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    std::vector<float> extent(n);
-    for (size_t g = 0; g < n; ++g) {
-        const Box& b = boxes[g];
-        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], double(b.lo[k])), hi[k] = std::max(hi[k], double(b.hi[k]));
-        extent[g] = std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
-    }
-    std::nth_element(extent.begin(), extent.begin() + std::ptrdiff_t(n / 2), extent.end());
+    for (const auto& bb : blockBounds)
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], bb[k]), hi[k] = std::max(hi[k], bb[3 + k]);
+    std::nth_element(extent.get(), extent.get() + n / 2, extent.get() + n);
     // 1.5 x the median extent: on bunny75k, 1 costs 10% more, 0.75 35% more, 0.5 sets most boxes
-    // aside (over kMaxCellsPerBox cells).
+    // aside (over kMaxCellsPerBox cells); 2 and 2.5 cost the same within noise.
     double size = std::max(double(extent[n / 2]) * 1.5, 1e-30);
+    extent.reset();
     Grid grid;
     for (;;) {
         double cells = 1;
@@ -108,16 +159,14 @@ BroadPhaseTimes collideGrid(std::span<const std::vector<Box>> objects, Candidate
     int keyBits = 0;
     while (keyBits < 32 && (uint64_t(1) << keyBits) < cellCount) ++keyBits;
 
-    // Entries (key << 32 | g), in g order; boxes over too many cells set aside.
-    std::vector<size_t> first(n + 1, 0);
-    std::vector<std::array<uint32_t, 3>> lowCell(n);  // the cell of each box's lower corner
+    // Entries (key << 32 | g), in g order; boxes over too many cells set aside. The buffers are
+    // not value-initialised (every element is written): the parallel loops touch them first.
+    std::unique_ptr<size_t[]> first(new size_t[n + 1]);
+    first[0] = 0;
     parallelFor(0, n, 4096, [&](const tbb::blocked_range<size_t>& r) {
         for (size_t g = r.begin(); g != r.end(); ++g) {
             uint64_t c = 1;
-            for (int k = 0; k < 3; ++k) {
-                lowCell[g][k] = grid.cell(boxes[g].lo[k], k);
-                c *= grid.cell(boxes[g].hi[k], k) - lowCell[g][k] + 1;
-            }
+            for (int k = 0; k < 3; ++k) c *= grid.cell(boxes[g].hi[k], k) - grid.cell(boxes[g].lo[k], k) + 1;
             first[g + 1] = c > kMaxCellsPerBox ? 0 : size_t(c);
         }
     });
@@ -126,7 +175,6 @@ BroadPhaseTimes collideGrid(std::span<const std::vector<Box>> objects, Candidate
         if (first[g + 1] == 0) big.push_back(uint32_t(g));
         first[g + 1] += first[g];
     }
-    // Not value-initialised (every element is written): no pass over fresh memory.
     const size_t entryCount = first[n];
     std::unique_ptr<uint64_t[]> entryBuffer(new uint64_t[entryCount]), tmpBuffer(new uint64_t[entryCount]);
     uint64_t* entries = entryBuffer.get();
@@ -137,56 +185,82 @@ BroadPhaseTimes collideGrid(std::span<const std::vector<Box>> objects, Candidate
             uint32_t l[3], h[3];
             for (int k = 0; k < 3; ++k) l[k] = grid.cell(b.lo[k], k), h[k] = grid.cell(b.hi[k], k);
             uint64_t* out = entries + first[g];
+            uint64_t* scratch = tmpBuffer.get() + first[g];
             for (uint32_t x = l[0]; x <= h[0]; ++x)
                 for (uint32_t y = l[1]; y <= h[1]; ++y)
-                    for (uint32_t z = l[2]; z <= h[2]; ++z) *out++ = grid.key(x, y, z) << 32 | g;
+                    for (uint32_t z = l[2]; z <= h[2]; ++z) *out++ = grid.key(x, y, z) << 32 | g, *scratch++ = 0;
         }
     });
+    first.reset();
     entries = radixSortHigh(entries, tmpBuffer.get(), entryCount, keyBits);
-    std::vector<size_t> runs;  // start of each cell's entries, then the end
-    for (size_t i = 0; i < entryCount; ++i)
-        if (i == 0 || entries[i] >> 32 != entries[i - 1] >> 32) runs.push_back(i);
+    // The start of each cell's entries, then the end: boundaries found per fixed block, joined
+    // in block order.
+    const size_t entryBlocks = (entryCount + kBlock - 1) / kBlock;
+    std::vector<std::vector<size_t>> blockRuns(entryBlocks);
+    parallelForEach(0, entryBlocks, [&](size_t blk) {
+        for (size_t i = blk * kBlock, e = std::min(entryCount, i + kBlock); i < e; ++i)
+            if (i == 0 || entries[i] >> 32 != entries[i - 1] >> 32) blockRuns[blk].push_back(i);
+    });
+    std::vector<size_t> runs;
+    for (const auto& br : blockRuns) runs.insert(runs.end(), br.begin(), br.end());
     runs.push_back(entryCount);
+    blockRuns = {};
 
-    // Each cell's boxes, packed in cell order, with the axes on which the cell is the box's
-    // lower corner's cell: a pair's owner cell (the larger lower cell on each axis, cell() being
-    // monotone) is this cell iff on every axis one of the two starts here.
+    // Each cell's boxes are copied next to each other when the cell is tested (in cache), with
+    // the axes on which the cell is the box's lower corner's cell: a pair's owner cell (the
+    // larger lower cell on each axis, cell() being monotone) is this cell iff on every axis one
+    // of the two starts here.
     struct Entry {
         Box box;
         uint32_t g, low;  // low: bit k when the box's lower corner is in this cell along k
     };
-    std::unique_ptr<Entry[]> packed(new Entry[entryCount]);
-    parallelFor(0, runs.size() - 1, 256, [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t run = r.begin(); run != r.end(); ++run) {
-            const uint64_t key = entries[runs[run]] >> 32;
-            const uint32_t z = uint32_t(key % grid.dims[2]), y = uint32_t(key / grid.dims[2] % grid.dims[1]),
-                           x = uint32_t(key / grid.dims[2] / grid.dims[1]);
-            for (size_t i = runs[run]; i < runs[run + 1]; ++i) {
-                const uint32_t g = uint32_t(entries[i]);
-                const std::array<uint32_t, 3>& c = lowCell[g];
-                packed[i] = {boxes[g], g, uint32_t(c[0] == x) | uint32_t(c[1] == y) << 1 | uint32_t(c[2] == z) << 2};
-            }
-        }
-    });
     times.buildSeconds = seconds(t0);
 
     t0 = std::chrono::steady_clock::now();
     parallelFor(0, runs.size() - 1, 64, [&](const tbb::blocked_range<size_t>& r) {
-        std::vector<Candidate> batch;
-        batch.reserve(kBatch);
+        // Branch-free inner loop: a pair's test is hard to predict (about one in seven passes),
+        // so every pair is written and the write position advances only on a hit.
+        std::array<std::array<uint32_t, 2>, kBatch> hits;
+        std::array<Candidate, kBatch> batch;
+        size_t count = 0;
+        auto flush = [&] {
+            for (size_t k = 0; k < count; ++k) batch[k] = candidate(hits[k][0], hits[k][1]);
+            fn(user, batch.data(), uint32_t(count));
+            count = 0;
+        };
+        std::vector<Entry> packed;
         for (size_t run = r.begin(); run != r.end(); ++run) {
-            const size_t s = runs[run], e = runs[run + 1];
+            const size_t s = 0, e = runs[run + 1] - runs[run];
+            if (e < 2) continue;
+            const uint64_t key = entries[runs[run]] >> 32;
+            const uint32_t cz = uint32_t(key % grid.dims[2]), cy = uint32_t(key / grid.dims[2] % grid.dims[1]),
+                           cx = uint32_t(key / grid.dims[2] / grid.dims[1]);
+            packed.resize(e);
+            for (size_t i = 0; i < e; ++i) {
+                const uint32_t g = uint32_t(entries[runs[run] + i]);
+                const Box& b = boxes[g];
+                packed[i] = {b, g,
+                             uint32_t(grid.cell(b.lo[0], 0) == cx) | uint32_t(grid.cell(b.lo[1], 1) == cy) << 1 |
+                                 uint32_t(grid.cell(b.lo[2], 2) == cz) << 2};
+            }
             for (size_t i = s; i + 1 < e; ++i) {
                 const Entry& ea = packed[i];
-                for (size_t j = i + 1; j < e; ++j) {
-                    const Entry& eb = packed[j];
-                    if ((ea.low | eb.low) != 7 || !overlap(ea.box, eb.box)) continue;
-                    batch.push_back(candidate(ea.g, eb.g));
-                    if (batch.size() == kBatch) fn(user, batch.data(), uint32_t(batch.size())), batch.clear();
+                for (size_t from = i + 1; from < e; from += kChunk) {
+                    const size_t to = std::min(e, from + kChunk);
+                    if (count + (to - from) > kBatch) flush();  // room for every pair of the chunk
+                    for (size_t j = from; j < to; ++j) {
+                        const Entry& eb = packed[j];
+                        const bool hit = ((ea.low | eb.low) == 7) & (ea.box.lo[0] <= eb.box.hi[0]) &
+                                         (eb.box.lo[0] <= ea.box.hi[0]) & (ea.box.lo[1] <= eb.box.hi[1]) &
+                                         (eb.box.lo[1] <= ea.box.hi[1]) & (ea.box.lo[2] <= eb.box.hi[2]) &
+                                         (eb.box.lo[2] <= ea.box.hi[2]);
+                        hits[count] = {ea.g, eb.g};
+                        count += hit;
+                    }
                 }
             }
         }
-        if (!batch.empty()) fn(user, batch.data(), uint32_t(batch.size()));
+        if (count > 0) flush();
     });
     // Boxes set aside: against every other box (a pair of two such boxes once).
     if (!big.empty()) {

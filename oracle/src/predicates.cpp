@@ -247,6 +247,33 @@ bool straddles(int d0, int d1, int d2) {
     return (d0 > 0 || d1 > 0 || d2 > 0) && (d0 < 0 || d1 < 0 || d2 < 0);
 }
 
+// Guigue-Devillers given the exact signs of a's corners against b's plane (da) and of b's
+// against a's (db): CGAL's do_intersect, with crossing told from touching.
+Contact triangleContactFromSigns(const TrianglePoints& a, const TrianglePoints& b, const int da[3], const int db[3]) {
+    int ia[4], ib[4];
+    bool coplanar = false;
+    if (!canonicalOrder(da[0], da[1], da[2], ia, &coplanar)) {
+        if (!coplanar) return Contact::None;
+        // Coplanar: CGAL's 2D test on coplanar orientations (rare; it decides exactly too).
+        return coplanarTriangles(a, b) ? Contact::Touching : Contact::None;
+    }
+    if (!canonicalOrder(db[0], db[1], db[2], ib, &coplanar)) {
+        // b's corners all on a's plane while a's are not all on b's: impossible for
+        // non-degenerate triangles, but answer as CGAL does.
+        if (!coplanar) return Contact::None;
+        return coplanarTriangles(a, b) ? Contact::Touching : Contact::None;
+    }
+    // The chords [i, j] of a and [k, l] of b on the common line overlap iff k <= j and i <= l;
+    // each comparison is the sign of one orientation (zero: the two ends coincide).
+    const int lo = orient3d(a[ia[0]], a[ia[1]], b[ib[0]], b[ib[1]]);
+    const int hi = orient3d(a[ia[2]], a[ia[3]], b[ib[3]], b[ib[2]]);
+    if (lo > 0 || hi > 0) return Contact::None;
+    // Crossing: both straddle the other's plane and the overlap has positive length, i.e. both
+    // comparisons are strict; then the overlap's inner points are interior to both triangles.
+    if (lo < 0 && hi < 0 && straddles(da[0], da[1], da[2]) && straddles(db[0], db[1], db[2])) return Contact::Crossing;
+    return Contact::Touching;
+}
+
 }  // namespace
 
 int orient3d(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s) {
@@ -275,34 +302,10 @@ bool collinear(const Vec3d& p, const Vec3d& q, const Vec3d& r) {
 
 Contact triangleContact(const TrianglePoints& a, const TrianglePoints& b) {
     // Signs of a's corners with respect to b's plane, then of b's with respect to a's.
-    const int da0 = orient3d(b[0], b[1], b[2], a[0]);
-    const int da1 = orient3d(b[0], b[1], b[2], a[1]);
-    const int da2 = orient3d(b[0], b[1], b[2], a[2]);
-    int ia[4], ib[4];
-    bool coplanar = false;
-    if (!canonicalOrder(da0, da1, da2, ia, &coplanar)) {
-        if (!coplanar) return Contact::None;
-        // Coplanar: CGAL's 2D test on coplanar orientations (rare; it decides exactly too).
-        return coplanarTriangles(a, b) ? Contact::Touching : Contact::None;
-    }
-    const int db0 = orient3d(a[0], a[1], a[2], b[0]);
-    const int db1 = orient3d(a[0], a[1], a[2], b[1]);
-    const int db2 = orient3d(a[0], a[1], a[2], b[2]);
-    if (!canonicalOrder(db0, db1, db2, ib, &coplanar)) {
-        // b's corners all on a's plane while a's are not all on b's: impossible for
-        // non-degenerate triangles, but answer as CGAL does.
-        if (!coplanar) return Contact::None;
-        return coplanarTriangles(a, b) ? Contact::Touching : Contact::None;
-    }
-    // The chords [i, j] of a and [k, l] of b on the common line overlap iff k <= j and i <= l;
-    // each comparison is the sign of one orientation (zero: the two ends coincide).
-    const int lo = orient3d(a[ia[0]], a[ia[1]], b[ib[0]], b[ib[1]]);
-    const int hi = orient3d(a[ia[2]], a[ia[3]], b[ib[3]], b[ib[2]]);
-    if (lo > 0 || hi > 0) return Contact::None;
-    // Crossing: both straddle the other's plane and the overlap has positive length, i.e. both
-    // comparisons are strict; then the overlap's inner points are interior to both triangles.
-    if (lo < 0 && hi < 0 && straddles(da0, da1, da2) && straddles(db0, db1, db2)) return Contact::Crossing;
-    return Contact::Touching;
+    const int da[3] = {orient3d(b[0], b[1], b[2], a[0]), orient3d(b[0], b[1], b[2], a[1]), orient3d(b[0], b[1], b[2], a[2])};
+    if (da[0] == da[1] && da[1] == da[2] && da[0] != 0) return Contact::None;
+    const int db[3] = {orient3d(a[0], a[1], a[2], b[0]), orient3d(a[0], a[1], a[2], b[1]), orient3d(a[0], a[1], a[2], b[2])};
+    return triangleContactFromSigns(a, b, da, db);
 }
 
 bool triangleSegmentIntersect(const TrianglePoints& t, const Vec3d& s0, const Vec3d& s1) {
@@ -381,12 +384,10 @@ inline int planeSide(const Prim& a, double x, double y, double z) {
 }
 inline int planeSide(const Prim& a, const Prim& b, int k) { return planeSide(a, b.p[k][0], b.p[k][1], b.p[k][2]); }
 
-// Sign of orient3d(a's corners, b's corner k), exactly: the filter, then a's integer normal when
-// b's corner is an integer in a's unit (|N| < 2^61, |w| < 2^63: the dot product fits 126 bits),
-// then orient3d.
-int exactSide(const Prim& a, const Prim& b, int k) {
-    const int d = planeSide(a, b, k);
-    if (d != 0) return d;
+// Sign of orient3d(a's corners, b's corner k) when the filter cannot tell: a's integer normal
+// when b's corner is an integer in a's unit (|N| < 2^61, |w| < 2^63: the dot product fits 126
+// bits), then orient3d.
+[[gnu::noinline]] int exactSideSlow(const Prim& a, const Prim& b, int k) {
     if (a.unit != kNoUnit) {
         const double scale = pow2(-a.unit);
         __int128 det = 0;
@@ -410,16 +411,10 @@ int exactSide(const Prim& a, const Prim& b, int k) {
     return orient3d(corner(a, 0), corner(a, 1), corner(a, 2), corner(b, k));
 }
 
-// All of b's corners but `skip` (-1: none) certainly strictly on one side of a's plane.
-inline bool oneSide(const Prim& a, const Prim& b, int skip) {
-    int s = 0;
-    for (int k = 0; k < 3; ++k) {
-        if (k == skip) continue;
-        const int d = planeSide(a, b, k);
-        if (d == 0 || (s != 0 && d != s)) return false;
-        s = d;
-    }
-    return true;
+// Sign of orient3d(a's corners, b's corner k), exactly: the filter, then exactSideSlow.
+inline int exactSide(const Prim& a, const Prim& b, int k) {
+    const int d = planeSide(a, b, k);
+    return d != 0 ? d : exactSideSlow(a, b, k);
 }
 
 }  // namespace
@@ -490,30 +485,58 @@ Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
     } else if (shared == 1) {
         // b's opposite edge strictly on one side of a's plane: b meets a's plane only at the
         // shared vertex, which is on neither opposite edge: no contact elsewhere (and the same
-        // with the roles swapped).
-        if (oneSide(a, b, sb[0]) || oneSide(b, a, sa[0])) return Contact::None;
+        // with the roles swapped). Exact signs: nearly coplanar neighbours (subdivided flat
+        // faces, rounded midpoints) are decided here too, not in faceContact.
+        const int b1 = (sb[0] + 1) % 3, b2 = (sb[0] + 2) % 3, a1 = (sa[0] + 1) % 3, a2 = (sa[0] + 2) % 3;
+        const int s1 = exactSide(a, b, b1), s2 = exactSide(a, b, b2);
+        if (s1 == s2 && s1 != 0) return Contact::None;
+        const int t1 = exactSide(b, a, a1), t2 = exactSide(b, a, a2);
+        if (t1 == t2 && t1 != 0) return Contact::None;
         // Coplanar (b's other corners exactly on a's plane, hence all six points): they meet
         // besides the shared vertex v iff their closed wedges at v share more than v, i.e. a
         // boundary ray of one lies in the other. The same answer as the opposite-edge rule (if
         // the wedges overlap in a cone C, either the opposite edges cross in C or the nearer one
         // lies in the other triangle), decided with a few exact 2D orientations.
-        const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)};
-        const Vec3d& v = pa[sa[0]];
-        const Vec3d &a1 = pa[(sa[0] + 1) % 3], &a2 = pa[(sa[0] + 2) % 3];
-        const Vec3d b1 = corner(b, (sb[0] + 1) % 3), b2 = corner(b, (sb[0] + 2) % 3);
-        if (exactSide(a, b, (sb[0] + 1) % 3) == 0 && exactSide(a, b, (sb[0] + 2) % 3) == 0) {
+        if (s1 == 0 && s2 == 0) {
+            const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)};
+            const Vec3d& v = pa[sa[0]];
+            const Vec3d &pa1 = pa[a1], &pa2 = pa[a2];
+            const Vec3d pb1 = corner(b, b1), pb2 = corner(b, b2);
             int i = 0, j = 1;
             coplanarFrame(pa, &i, &j);  // a (so b too, being coplanar) projects non-degenerately
-            const int oa = orient2d(v, a1, a2, i, j), ob = orient2d(v, b1, b2, i, j);
+            const int oa = orient2d(v, pa1, pa2, i, j), ob = orient2d(v, pb1, pb2, i, j);
             auto inWedge = [&](const Vec3d& p1, const Vec3d& p2, int o, const Vec3d& p) {
                 return o * orient2d(v, p1, p, i, j) >= 0 && o * orient2d(v, p, p2, i, j) >= 0;
             };
-            const bool meet = inWedge(a1, a2, oa, b1) || inWedge(a1, a2, oa, b2) || inWedge(b1, b2, ob, a1) ||
-                              inWedge(b1, b2, ob, a2);
+            const bool meet = inWedge(pa1, pa2, oa, pb1) || inWedge(pa1, pa2, oa, pb2) || inWedge(pb1, pb2, ob, pa1) ||
+                              inWedge(pb1, pb2, ob, pa2);
             return meet ? Contact::Touching : Contact::None;
         }
+        // Not coplanar: b meets a's plane in a segment [v, p], p on b's opposite edge, and a
+        // meets b's plane in [v, q], q on a's; both lie on the planes' common line, so the
+        // triangles meet beyond v (CGAL's rule: the nearer of p and q is on the other triangle)
+        // iff p is on q's side of v, i.e. in a's closed wedge at v. With a's corners v, a1, a2
+        // in cyclic order and n their normal, the side of p against the line from v to a2 is
+        // sign(orient3d(v, a2, b1, b2)) * sign(s2 - s1) (the segment b1 b2 crosses the plane
+        // going the way of s2 - s1); a1's side is negative. When q = a2 (t2 = 0) that line is
+        // the common line itself: use the line to a1 instead, on whose positive side a2 lies.
+        const Vec3d v = corner(a, sa[0]), pb1 = corner(b, b1), pb2 = corner(b, b2);
+        const int crossingWay = s2 > s1 ? 1 : -1;  // s1 != s2 here
+        const bool meet = t2 != 0 ? orient3d(v, corner(a, a2), pb1, pb2) * crossingWay < 0
+                                  : orient3d(v, corner(a, a1), pb1, pb2) * crossingWay > 0;
+        if (!meet) return Contact::None;
+        // They meet along [v, min(p, q)]: a penetration when each straddles the other's plane.
+        return s1 * s2 < 0 && t1 * t2 < 0 ? Contact::Crossing : Contact::Touching;
     } else if (shared == 0) {
-        if (oneSide(a, b, -1) || oneSide(b, a, -1)) return Contact::None;
+        // All of b's corners strictly on one side of a's plane, or all of a's of b's: apart.
+        // Exact signs, then Guigue-Devillers on them (triangleContact without recomputing).
+        int db[3], da[3];
+        for (int k = 0; k < 3; ++k) db[k] = exactSide(a, b, k);
+        if (db[0] == db[1] && db[1] == db[2] && db[0] != 0) return Contact::None;
+        for (int k = 0; k < 3; ++k) da[k] = exactSide(b, a, k);
+        if (da[0] == da[1] && da[1] == da[2] && da[0] != 0) return Contact::None;
+        const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)}, pb{corner(b, 0), corner(b, 1), corner(b, 2)};
+        return triangleContactFromSigns(pa, pb, da, db);
     }
     const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)}, pb{corner(b, 0), corner(b, 1), corner(b, 2)};
     return faceContact(pa, a.v, pb, b.v, sameMesh);
