@@ -37,7 +37,8 @@ BroadPhaseTimes collideAll(std::span<const std::span<const Box>> objects, Candid
 uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits);
 
 // The same pairs from a uniform grid (broad_phase_grid.cpp), each unordered pair once, as
-// (object0, prim0) < (object1, prim1). Throws std::bad_alloc only.
+// (object0, prim0) < (object1, prim1). At most 2^29 boxes in all (std::length_error beyond);
+// throws std::bad_alloc otherwise only.
 BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user);
 
 }  // namespace cullide::oracle::detail

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstddef>
 #include <memory>
+#include <stdexcept>
 
 namespace cullide::oracle::detail {
 namespace {
@@ -29,7 +30,8 @@ bool overlap(const Box& a, const Box& b) {
 
 constexpr uint32_t kMaxCellsPerBox = 64;  // beyond: tested against every box
 constexpr size_t kBatch = 1024;            // candidates handed to the callback at once
-constexpr size_t kChunk = 256;             // a box's partners in a cell tested between flushes
+constexpr size_t kChunk = 256;
+constexpr uint32_t kIndexMask = (uint32_t(1) << 29) - 1;  // entries: cell << 32 | low axes << 29 | box             // a box's partners in a cell tested between flushes
 
 struct Grid {
     double origin[3];
@@ -106,6 +108,7 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     for (size_t o = 0; o < objects.size(); ++o) offset[o + 1] = offset[o] + objects[o].size();
     const size_t n = offset.back();
     if (n == 0) return times;
+    if (n > kIndexMask) throw std::length_error("grid broad phase: more than 2^29 boxes");
     std::vector<Box> joined;
     std::vector<uint32_t> objectOf;
     if (objects.size() > 1) {
@@ -159,7 +162,7 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     int keyBits = 0;
     while (keyBits < 32 && (uint64_t(1) << keyBits) < cellCount) ++keyBits;
 
-    // Entries (key << 32 | g), in g order; boxes over too many cells set aside. The buffers are
+    // Entries (key << 32 | low << 29 | g), in g order; boxes over too many cells set aside. The buffers are
     // not value-initialised (every element is written): the parallel loops touch them first.
     std::unique_ptr<size_t[]> first(new size_t[n + 1]);
     first[0] = 0;
@@ -186,9 +189,14 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
             for (int k = 0; k < 3; ++k) l[k] = grid.cell(b.lo[k], k), h[k] = grid.cell(b.hi[k], k);
             uint64_t* out = entries + first[g];
             uint64_t* scratch = tmpBuffer.get() + first[g];
+            // Bits 29-31: the axes on which this cell holds the box's lower corner.
             for (uint32_t x = l[0]; x <= h[0]; ++x)
                 for (uint32_t y = l[1]; y <= h[1]; ++y)
-                    for (uint32_t z = l[2]; z <= h[2]; ++z) *out++ = grid.key(x, y, z) << 32 | g, *scratch++ = 0;
+                    for (uint32_t z = l[2]; z <= h[2]; ++z) {
+                        const uint64_t low = uint64_t(x == l[0]) | uint64_t(y == l[1]) << 1 | uint64_t(z == l[2]) << 2;
+                        *out++ = grid.key(x, y, z) << 32 | low << 29 | g;
+                        *scratch++ = 0;  // first touch of the sort's buffer, in parallel too
+                    }
         }
     });
     first.reset();
@@ -232,16 +240,10 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         for (size_t run = r.begin(); run != r.end(); ++run) {
             const size_t s = 0, e = runs[run + 1] - runs[run];
             if (e < 2) continue;
-            const uint64_t key = entries[runs[run]] >> 32;
-            const uint32_t cz = uint32_t(key % grid.dims[2]), cy = uint32_t(key / grid.dims[2] % grid.dims[1]),
-                           cx = uint32_t(key / grid.dims[2] / grid.dims[1]);
             packed.resize(e);
             for (size_t i = 0; i < e; ++i) {
-                const uint32_t g = uint32_t(entries[runs[run] + i]);
-                const Box& b = boxes[g];
-                packed[i] = {b, g,
-                             uint32_t(grid.cell(b.lo[0], 0) == cx) | uint32_t(grid.cell(b.lo[1], 1) == cy) << 1 |
-                                 uint32_t(grid.cell(b.lo[2], 2) == cz) << 2};
+                const uint32_t g = uint32_t(entries[runs[run] + i]) & kIndexMask;
+                packed[i] = {boxes[g], g, uint32_t(entries[runs[run] + i] >> 29) & 7};
             }
             for (size_t i = s; i + 1 < e; ++i) {
                 const Entry& ea = packed[i];

@@ -239,6 +239,9 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
         });
         truth.trianglesTested += d.prims.size();
     }
+    if (truth.trianglesTested > (size_t(1) << 29))
+        throw InputError("scene", std::to_string(truth.trianglesTested) +
+                                      " triangles to test: the oracle's broad phase takes at most 2^29 (536,870,912)");
     truth.setupSeconds = since(t0);
 
     std::vector<std::span<const Box>> boxes(ctx.objects.size());

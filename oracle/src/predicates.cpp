@@ -466,14 +466,19 @@ void setPlane(Prim& prim) {
 }
 
 Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
+    // Shared vertex ids, without branches (which neighbour shares what is unpredictable): bit
+    // 3i + j when a's corner i is b's corner j. The corners of a kept triangle are distinct ids,
+    // so each bit is a different corner on both sides.
     int shared = 0, sa[3] = {0, 0, 0}, sb[3] = {0, 0, 0};
-    if (sameMesh)
+    if (sameMesh) {
+        uint32_t mask = 0;
         for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j)
-                if (a.v[i] == b.v[j]) {
-                    sa[shared] = i, sb[shared] = j, ++shared;
-                    break;
-                }
+            for (int j = 0; j < 3; ++j) mask |= uint32_t(a.v[i] == b.v[j]) << (3 * i + j);
+        for (; mask != 0 && shared < 3; mask &= mask - 1, ++shared) {
+            const int bit = std::countr_zero(mask);
+            sa[shared] = bit / 3, sb[shared] = bit % 3;
+        }
+    }
     if (shared == 2) {
         // Not a fold-over unless b's opposite corner is on a's plane (faceContact's first test);
         // then the two opposite corners strictly on one side of the edge (its second).
