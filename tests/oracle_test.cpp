@@ -13,6 +13,7 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -282,6 +283,61 @@ TEST(OracleCgal, GeneratedScenesSameAsCgal) {
     const Mesh cows = makeTwoCows(bundled("cow.off"), req).scene.objects[0].mesh;
     expectSameAsCgal(cows, "two cows");
 }
+
+// Trap: the fast paths for neighbours (one exact orientation decides a shared vertex; signs
+// reused by Guigue-Devillers) must give faceContact's answer where the float filter cannot
+// decide: fans of triangles around one vertex whose rims lie within a few ulps of one plane
+// (subdivided flat faces with rounded midpoints), some corners exactly on it, some folded back
+// through it. Every pair against faceContact on all pairs (the extra triangles at each centre
+// make the mesh non-manifold, which CGAL's Surface_mesh refuses: the CGAL cross-check of the same
+// paths is SubdividedCowSameAsCgal).
+TEST(Oracle, NearlyCoplanarNeighboursMatchFaceContact) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::uniform_int_distribution<int> ulps(-3, 3), pick(0, 9);
+    Mesh m;
+    for (int fan = 0; fan < 30; ++fan) {
+        const uint32_t centre = uint32_t(m.positions.size());
+        const Vec3f c(float(fan % 6) * 3, float(fan / 6) * 3, 0.5f);
+        m.positions.push_back(c);
+        const int k = 5 + fan % 4;
+        for (int i = 0; i < k; ++i) {
+            const float angle = float(i) * 6.2831853f / float(k) + 0.2f * u(rng);
+            float z = c.z();
+            for (int step = pick(rng) < 5 ? 0 : ulps(rng); step != 0; step += step > 0 ? -1 : 1)
+                z = std::nextafter(z, step > 0 ? 1.0f : 0.0f);
+            if (pick(rng) == 0) z += 0.05f * u(rng);  // now and then a real fold
+            m.positions.push_back(c + Vec3f(std::cos(angle), std::sin(angle), z - c.z()));
+        }
+        for (int i = 0; i < k; ++i) m.triangles.push_back({centre, centre + 1 + uint32_t(i), centre + 1 + uint32_t((i + 1) % k)});
+        // Two triangles across the fan from its centre: crossing, touching or apart.
+        for (int extra = 0; extra < 2; ++extra) {
+            const uint32_t a = uint32_t(m.positions.size());
+            m.positions.push_back(c + Vec3f(u(rng), u(rng), 0.02f * u(rng)));
+            m.positions.push_back(c + Vec3f(u(rng), u(rng), pick(rng) < 6 ? 0.0f : 0.02f * u(rng)));
+            m.triangles.push_back({centre, a, a + 1});
+        }
+    }
+    std::vector<IntersectingPair> expected;
+    auto pts = [&](uint32_t t) {
+        const Triangle& i = m.triangles[t];
+        return TrianglePoints{m.positions[i[0]].cast<double>(), m.positions[i[1]].cast<double>(), m.positions[i[2]].cast<double>()};
+    };
+    const uint32_t n = uint32_t(m.triangles.size());
+    for (uint32_t a = 0; a < n; ++a)
+        for (uint32_t b = a + 1; b < n; ++b) {
+            const Contact c = faceContact(pts(a), m.triangles[a], pts(b), m.triangles[b], true);
+            if (c != Contact::None) expected.push_back({0, a, 0, b, c == Contact::Crossing ? X : T});
+        }
+    // Both classes occur, so that both answers are checked.
+    EXPECT_GT(std::count_if(expected.begin(), expected.end(), [](const IntersectingPair& p) { return p.cls == X; }), 5);
+    EXPECT_GT(std::count_if(expected.begin(), expected.end(), [](const IntersectingPair& p) { return p.cls == T; }), 5);
+    EXPECT_EQ(findIntersections(sceneOf({m})).pairs, expected);
+}
+
+// The cow subdivided once: rounded midpoints make most neighbours nearly (not exactly)
+// coplanar, the case the exact integer paths decide.
+TEST(OracleCgal, SubdividedCowSameAsCgal) { expectSameAsCgal(subdivide(bundled("cow.off")), "subdivided cow"); }
 
 }  // namespace
 }  // namespace cullide::oracle
