@@ -151,6 +151,10 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
     const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
     if (x0 > x1 || y0 > y1) return;
+    // Records one or two pixels wide (most, on meshes finer than the image) cost less in the
+    // scalar loop than the vector constants do.
+    if (x1 - x0 < 2)
+        return rasterizeInTile<F, Float>(t, bx0, by0, bx1, by1, depth, stride, mask, bits, fragments, passed);
     const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2];
     const __m256i off0 = _mm256_set_epi64x(3 * a0, 2 * a0, a0, 0), step0 = _mm256_set1_epi64x(4 * a0);
     const __m256i off1 = _mm256_set_epi64x(3 * a1, 2 * a1, a1, 0), step1 = _mm256_set1_epi64x(4 * a1);
@@ -779,7 +783,10 @@ private:
                 for (size_t t = 0; t < nTiles; ++t) visit(t);
                 return;
             }
-            if (e.recEnd - e.recBegin > kExactTilesUpTo) {  // large draws cover their rectangle anyway
+            const int rectTiles = (e.tiles.tx1 - e.tiles.tx0 + 1) * (e.tiles.ty1 - e.tiles.ty0 + 1);
+            // Large draws cover their rectangle anyway; a rectangle of one or two tiles wastes
+            // at most one visit, less than finding the exact set costs.
+            if (rectTiles <= 2 || e.recEnd - e.recBegin > kExactTilesUpTo) {
                 for (int ty = e.tiles.ty0; ty <= e.tiles.ty1; ++ty)
                     for (int tx = e.tiles.tx0; tx <= e.tiles.tx1; ++tx) visit(size_t(ty) * size_t(tilesX_) + size_t(tx));
                 return;
