@@ -30,8 +30,8 @@ bool overlap(const Box& a, const Box& b) {
 
 constexpr uint32_t kMaxCellsPerBox = 64;  // beyond: tested against every box
 constexpr size_t kBatch = 1024;            // candidates handed to the callback at once
-constexpr size_t kChunk = 256;
-constexpr uint32_t kIndexMask = (uint32_t(1) << 29) - 1;  // entries: cell << 32 | low axes << 29 | box             // a box's partners in a cell tested between flushes
+constexpr size_t kChunk = 256;             // a box's partners in a cell tested between flushes
+constexpr uint32_t kIndexMask = (uint32_t(1) << 29) - 1;  // entries: cell << 32 | low axes << 29 | box
 
 struct Grid {
     double origin[3];
@@ -162,8 +162,9 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     int keyBits = 0;
     while (keyBits < 32 && (uint64_t(1) << keyBits) < cellCount) ++keyBits;
 
-    // Entries (key << 32 | low << 29 | g), in g order; boxes over too many cells set aside. The buffers are
-    // not value-initialised (every element is written): the parallel loops touch them first.
+    // Entries (key << 32 | low << 29 | g), in g order; boxes over too many cells set aside. The
+    // buffers are not value-initialised (every element is written): the parallel loops touch
+    // them first.
     std::unique_ptr<size_t[]> first(new size_t[n + 1]);
     first[0] = 0;
     parallelFor(0, n, 4096, [&](const tbb::blocked_range<size_t>& r) {
@@ -226,8 +227,8 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
 
     t0 = std::chrono::steady_clock::now();
     parallelFor(0, runs.size() - 1, 64, [&](const tbb::blocked_range<size_t>& r) {
-        // Branch-free inner loop: a pair's test is hard to predict (22-29% pass on the bundled meshes),
-        // so every pair is written and the write position advances only on a hit.
+        // Branch-free inner loop: a pair's test is hard to predict (22-29% pass on the bundled
+        // meshes), so every pair is written and the write position advances only on a hit.
         std::array<std::array<uint32_t, 2>, kBatch> hits;
         std::array<Candidate, kBatch> batch;
         size_t count = 0;
@@ -238,14 +239,14 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         };
         std::vector<Entry> packed;
         for (size_t run = r.begin(); run != r.end(); ++run) {
-            const size_t s = 0, e = runs[run + 1] - runs[run];
+            const size_t e = runs[run + 1] - runs[run];
             if (e < 2) continue;
             packed.resize(e);
             for (size_t i = 0; i < e; ++i) {
                 const uint32_t g = uint32_t(entries[runs[run] + i]) & kIndexMask;
                 packed[i] = {boxes[g], g, uint32_t(entries[runs[run] + i] >> 29) & 7};
             }
-            for (size_t i = s; i + 1 < e; ++i) {
+            for (size_t i = 0; i + 1 < e; ++i) {
                 const Entry& ea = packed[i];
                 for (size_t from = i + 1; from < e; from += kChunk) {
                     const size_t to = std::min(e, from + kChunk);

@@ -37,8 +37,10 @@ int32_t integerUnit(const float* coordinates, size_t count);
 // Fills n, perm, ni and unit from p (p, v, triangle set by the caller).
 void setPlane(Prim& prim);
 
-// The narrow phase of one candidate pair (faceContact's answer, exactly): quick rejections by
-// the plane filter, then faceContact when they cannot decide.
+// The narrow phase of one candidate pair (faceContact's answer, exactly): by the shared vertex
+// ids, the exact signs of each triangle's corners against the other's plane (filter first, then
+// integer arithmetic), which reject most pairs; a shared vertex then takes one more orientation,
+// other pairs Guigue-Devillers on those signs; faceContact only for the rare rest.
 Contact primContact(const Prim& a, const Prim& b, bool sameMesh);
 
 }  // namespace cullide::oracle::detail

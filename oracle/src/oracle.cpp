@@ -73,17 +73,7 @@ PairClass toClass(Contact c) { return c == Contact::Crossing ? PairClass::Crossi
 void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
     Context& ctx = *static_cast<Context*>(user);
     Local& local = ctx.locals.local();
-    // The records are read in an order the cache cannot guess: fetch a few candidates ahead.
-    constexpr uint32_t kAhead = 8;
-    auto prefetch = [&](const Candidate& c) {
-        const Prim* p0 = &ctx.objects[c.object0].prims[c.prim0];
-        const Prim* p1 = &ctx.objects[c.object1].prims[c.prim1];
-        __builtin_prefetch(p0), __builtin_prefetch(reinterpret_cast<const char*>(p0) + 64);
-        __builtin_prefetch(p1), __builtin_prefetch(reinterpret_cast<const char*>(p1) + 64);
-    };
-    for (uint32_t k = 0; k < count && k < kAhead; ++k) prefetch(pairs[k]);
     for (uint32_t k = 0; k < count; ++k) {
-        if (k + kAhead < count) prefetch(pairs[k + kAhead]);
         const Candidate& c = pairs[k];
         // The broad phase reports each unordered pair once (the filter is for one reporting
         // both orders); primitives are in spatial order, so order the triangles for the output.
@@ -178,7 +168,7 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
         parallelFor(0, nv, 4096, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t v = r.begin(); v != r.end(); ++v) world[v] = applyTransform(object.transform, object.mesh.positions[v]);
         });
-        const std::span<const Vec3f> positions(world.data(), world.size());
+        const std::span<const Vec3f> positions = world;
         for (size_t v = 0; v < nv; ++v)
             for (int k = 0; k < 3; ++k) {
                 const float x = positions[v][k];
@@ -245,7 +235,7 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
     truth.setupSeconds = since(t0);
 
     std::vector<std::span<const Box>> boxes(ctx.objects.size());
-    for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = {ctx.objects[o].boxes.data(), ctx.objects[o].boxes.size()};
+    for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = ctx.objects[o].boxes;
     const detail::BroadPhaseTimes bt = options.broadPhase == BroadPhase::Embree
                                            ? detail::collideAll(boxes, narrowPhase, &ctx)
                                            : detail::collideGrid(boxes, narrowPhase, &ctx);
