@@ -944,6 +944,53 @@ TEST(Differential, ManySmallDrawsAndQueries) {
     expectSame(expected, run(s, view, fast), "many small draws");
 }
 
+// Trap: the fast path replays a draw's recorded fragments when the tile's next draw has the same
+// records (reducePCS's pattern). Replaying under a different function or mask, across a clear, after
+// a draw too large to record, or mistaking a different range for the same one, must all match the
+// plain per-pixel loop. Objects of mixed sizes (a few large enough to overflow the record buffer
+// at 1024 px tiles), each drawn 2-3 times in a row with random state between, sometimes a clear.
+TEST(Differential, RepeatedDrawsReplayTheirFragments) {
+    const DepthFunc funcs[] = {DepthFunc::Never,   DepthFunc::Less,     DepthFunc::Equal,  DepthFunc::LEqual,
+                               DepthFunc::Greater, DepthFunc::NotEqual, DepthFunc::GEqual, DepthFunc::Always};
+    for (uint64_t seed = 31; seed <= 34; ++seed) {
+        const int W = 170, H = 160;
+        const RandomScene base = randomScene(seed, W, H, 600, 0, 250.0);
+        RandomScene s;
+        s.geo = base.geo;
+        std::mt19937_64 rng(seed + 1000);
+        s.list.clear(1.0);
+        for (int k = 0; k < 120; ++k) {
+            const uint32_t first = uint32_t(rng() % 590);
+            const uint32_t count = k % 50 == 7 ? 600 - first : 1 + uint32_t(rng() % 10);  // sometimes to the end
+            const int repeats = 2 + int(rng() % 2);
+            for (int r = 0; r < repeats; ++r) {
+                s.list.depthFunc(funcs[rng() % 8]);
+                s.list.depthMask(rng() % 2 == 0);
+                const bool query = rng() % 3 != 0;
+                if (query) s.list.beginQuery();
+                s.list.draw(first, count);
+                if (query) s.list.endQuery();
+                if (rng() % 10 == 0) s.list.clear(0.25 + 0.75 * double(rng() % 4) / 3);
+            }
+            if (rng() % 4 == 0) s.list.draw(first, count + (first + count < 600 ? 1 : 0));  // a different range
+        }
+        const OrthoView view = windowView(W, H, seed % 2 ? DepthFormat::unorm(24) : DepthFormat::float32());
+        CpuBackendOptions ref;
+        ref.scalarReference = true;
+        const Outcome expected = run(s, view, ref, 2);
+        EXPECT_GT(expected.stats.passed, 0u);
+        for (int tile : {16, 64, 1024})
+            for (bool simd : {true, false}) {
+                CpuBackendOptions fast;
+                fast.tileSize = tile;
+                fast.threads = 2;
+                fast.simd = simd;
+                expectSame(expected, run(s, view, fast, 2),
+                           "seed " + std::to_string(seed) + " tile " + std::to_string(tile) + (simd ? " simd" : " scalar"));
+            }
+    }
+}
+
 // Trap: results depending on scheduling (shared counters, racing tiles, float sums) — identical
 // depth buffers, results and stats for 1, 2 and 8 threads on larger random scenes.
 TEST(Differential, ThreadCountInvariance) {

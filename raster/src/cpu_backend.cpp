@@ -33,6 +33,7 @@
 #include "triangle_setup.h"
 
 #include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/enumerable_thread_specific.h>
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
@@ -40,6 +41,7 @@
 #include <array>
 #include <bit>
 #include <string>
+#include <utility>
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -97,15 +99,57 @@ struct alignas(64) TileOut {
     uint64_t fragments = 0, passed = 0;
 };
 
+// Fragments recorded by a draw, for later draws of the same records in the same tile (reducePCS
+// draws each object four times: to write and to test, in both passes). A draw's fragments and
+// their incoming depths depend only on its records and the tile, not on the GL state, so a later
+// draw replays them in the same order instead of rasterizing again: same counts, same buffer.
+// A group is up to four consecutive pixels of one row.
+struct FragGroup {
+    uint32_t pixel;  // depth-buffer index of lane 0
+    uint32_t lanes;  // bit l set: pixel + l is a fragment
+    uint32_t z[4];   // incoming depth codes, per lane
+};
+constexpr size_t kFragCap = size_t(1) << 16;  // groups per thread and tile; draws beyond are not recorded
+
+// Per thread: the groups recorded in the current tile and an open-addressing table from a draw's
+// record range to its groups.
+struct FragCache {
+    struct Entry {
+        uint32_t recBegin = UINT32_MAX, recEnd = 0;  // empty: begin > end, which no draw has
+        uint32_t start = 0, stop = 0;       // groups[start, stop)
+    };
+    std::vector<FragGroup> groups;
+    std::vector<Entry> table;
+    size_t used = 0;
+
+    void reset(size_t draws) {  // a new tile with up to `draws` draws
+        if (groups.size() < kFragCap) groups.resize(kFragCap);
+        const size_t cap = std::bit_ceil(std::max<size_t>(16, 2 * draws));
+        table.assign(cap, Entry{});
+        used = 0;
+    }
+    static size_t hash(uint32_t b, uint32_t e) { return size_t((uint64_t(b) << 32 | e) * 0x9E3779B97F4A7C15ull >> 40); }
+    // The entry of [b, e), or the empty slot where it would go.
+    Entry& find(uint32_t b, uint32_t e) {
+        const size_t mask = table.size() - 1;
+        for (size_t i = hash(b, e) & mask;; i = (i + 1) & mask) {
+            Entry& x = table[i];
+            if ((x.recBegin == b && x.recEnd == e) || x.recBegin > x.recEnd) return x;
+        }
+    }
+};
+
 // Every parallel loop of the backend is one phase whose tasks touch disjoint data; phases
 // follow each other. cullide::parallelFor (cullide/parallel.h) annotates the joins for
 // ThreadSanitizer.
 using cullide::parallelFor;
 
 // The hot loop: one record clipped to a pixel rectangle (inclusive bounds).
-template <DepthFunc F, bool Float>
+// Record: also append the fragments to `rec` as groups (the caller guarantees room for one group
+// per pixel of the clipped rectangle).
+template <DepthFunc F, bool Float, bool Record>
 void rasterizeInTile(const EdgeTri& t, int bx0, int by0, int bx1, int by1, uint32_t* depth, size_t stride, bool mask,
-                     int bits, uint64_t& fragments, uint64_t& passed) {
+                     int bits, uint64_t& fragments, uint64_t& passed, FragGroup*& rec) {
     const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
     const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
     if (x0 > x1 || y0 > y1) return;
@@ -117,11 +161,22 @@ void rasterizeInTile(const EdgeTri& t, int bx0, int by0, int bx1, int by1, uint3
         int64_t e2 = a2 * x0 + t.b[2] * j + t.c[2];
         const double row = t.plane.row(j);
         uint32_t* d = depth + size_t(j) * stride;
+        [[maybe_unused]] FragGroup* group = nullptr;  // the row's open group
         for (int i = x0; i <= x1; ++i, e0 += a0, e1 += a1, e2 += a2) {
             if ((e0 | e1 | e2) < 0) continue;
             ++frag;
             const double z = clampDepth(t.plane.at(row, i));
             const uint32_t incoming = Float ? std::bit_cast<uint32_t>(float(z)) : encodeUnorm(z, bits);
+            if constexpr (Record) {
+                const uint32_t pixel = uint32_t(size_t(j) * stride + size_t(i));
+                if (group == nullptr || pixel - group->pixel >= 4) {
+                    group = rec++;
+                    group->pixel = pixel;
+                    group->lanes = 0;
+                }
+                group->lanes |= 1u << (pixel - group->pixel);
+                group->z[pixel - group->pixel] = incoming;
+            }
             const uint32_t stored = d[i];
             const bool ok = depthTest(F, incoming, stored);  // branch-free below: outcomes are noisy
             pass += ok;
@@ -144,17 +199,37 @@ alignas(16) constexpr int32_t kLaneMasks[16][4] = {
     {0, -1, -1, 0}, {-1, -1, -1, 0}, {0, 0, 0, -1},   {-1, 0, 0, -1},   {0, -1, 0, -1},  {-1, -1, 0, -1},
     {0, 0, -1, -1}, {-1, 0, -1, -1}, {0, -1, -1, -1}, {-1, -1, -1, -1}};
 
-template <DepthFunc F, bool Float>
+// The depth test of four lanes at once (unsigned comparisons through the signed ones, sign bits
+// flipped), for the lanes in `lanes`.
+template <DepthFunc F>
+__attribute__((target("avx2"))) inline __m128i depthTest4(__m128i incoming, __m128i stored, __m128i lanes) {
+    const __m128i signBit = _mm_set1_epi32(INT32_MIN);
+    const __m128i si = _mm_xor_si128(incoming, signBit), ss = _mm_xor_si128(stored, signBit);
+    const __m128i all = _mm_set1_epi32(-1);
+    __m128i ok;
+    if constexpr (F == DepthFunc::Never) ok = _mm_setzero_si128();
+    else if constexpr (F == DepthFunc::Less) ok = _mm_cmpgt_epi32(ss, si);
+    else if constexpr (F == DepthFunc::Equal) ok = _mm_cmpeq_epi32(incoming, stored);
+    else if constexpr (F == DepthFunc::LEqual) ok = _mm_xor_si128(_mm_cmpgt_epi32(si, ss), all);
+    else if constexpr (F == DepthFunc::Greater) ok = _mm_cmpgt_epi32(si, ss);
+    else if constexpr (F == DepthFunc::NotEqual) ok = _mm_xor_si128(_mm_cmpeq_epi32(incoming, stored), all);
+    else if constexpr (F == DepthFunc::GEqual) ok = _mm_xor_si128(_mm_cmpgt_epi32(ss, si), all);
+    else ok = all;
+    return _mm_and_si128(ok, lanes);
+}
+
+template <DepthFunc F, bool Float, bool Record>
 __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int bx0, int by0, int bx1, int by1,
                                                         uint32_t* depth, size_t stride, bool mask, int bits,
-                                                        uint64_t& fragments, uint64_t& passed) {
+                                                        uint64_t& fragments, uint64_t& passed, FragGroup*& rec) {
     const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
     const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
     if (x0 > x1 || y0 > y1) return;
     // Records one or two pixels wide (most, on meshes finer than the image) cost less in the
     // scalar loop than the vector constants do.
     if (x1 - x0 < 2)
-        return rasterizeInTile<F, Float>(t, bx0, by0, bx1, by1, depth, stride, mask, bits, fragments, passed);
+        return rasterizeInTile<F, Float, Record>(t, bx0, by0, bx1, by1, depth, stride, mask, bits, fragments, passed,
+                                                 rec);
     const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2];
     const __m256i off0 = _mm256_set_epi64x(3 * a0, 2 * a0, a0, 0), step0 = _mm256_set1_epi64x(4 * a0);
     const __m256i off1 = _mm256_set_epi64x(3 * a1, 2 * a1, a1, 0), step1 = _mm256_set1_epi64x(4 * a1);
@@ -165,7 +240,6 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
     const __m256d scale = _mm256_set1_pd(double(uint64_t(1) << bits)), magic = _mm256_set1_pd(0x1p52);
     const __m256i low32 = _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0);
-    const __m128i signBit = _mm_set1_epi32(INT32_MIN);
     uint64_t frag = 0, pass = 0;
     for (int j = y0; j <= y1; ++j) {
         __m256i e0 = _mm256_add_epi64(_mm256_set1_epi64x(a0 * x0 + t.b[0] * j + t.c[0]), off0);
@@ -199,26 +273,58 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
                 incoming = _mm256_castsi256_si128(
                     _mm256_permutevar8x32_epi32(_mm256_castpd_si256(_mm256_add_pd(code, magic)), low32));
             }
+            if constexpr (Record) {
+                FragGroup* g = rec++;
+                g->pixel = uint32_t(size_t(j) * stride + size_t(i));
+                g->lanes = uint32_t(inside);
+                _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), incoming);
+            }
             const __m128i lanes = _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[inside]));
             const __m128i stored = _mm_maskload_epi32(reinterpret_cast<const int*>(d + i), lanes);
-            // Unsigned comparisons through the signed ones, sign bits flipped.
-            const __m128i si = _mm_xor_si128(incoming, signBit), ss = _mm_xor_si128(stored, signBit);
-            const __m128i all = _mm_set1_epi32(-1);
-            __m128i ok;
-            if constexpr (F == DepthFunc::Never) ok = _mm_setzero_si128();
-            else if constexpr (F == DepthFunc::Less) ok = _mm_cmpgt_epi32(ss, si);
-            else if constexpr (F == DepthFunc::Equal) ok = _mm_cmpeq_epi32(incoming, stored);
-            else if constexpr (F == DepthFunc::LEqual) ok = _mm_xor_si128(_mm_cmpgt_epi32(si, ss), all);
-            else if constexpr (F == DepthFunc::Greater) ok = _mm_cmpgt_epi32(si, ss);
-            else if constexpr (F == DepthFunc::NotEqual) ok = _mm_xor_si128(_mm_cmpeq_epi32(incoming, stored), all);
-            else if constexpr (F == DepthFunc::GEqual) ok = _mm_xor_si128(_mm_cmpgt_epi32(ss, si), all);
-            else ok = all;
-            ok = _mm_and_si128(ok, lanes);
+            const __m128i ok = depthTest4<F>(incoming, stored, lanes);
             const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
             frag += uint64_t(std::popcount(unsigned(inside)));
             pass += uint64_t(std::popcount(unsigned(okBits)));
             if (mask && okBits != 0) _mm_maskstore_epi32(reinterpret_cast<int*>(d + i), ok, incoming);
         }
+    }
+    fragments += frag;
+    passed += pass;
+}
+#endif
+
+// A draw replayed from its recorded fragments: the same tests, counts and writes, in the same order.
+template <DepthFunc F>
+void replayFragments(const FragGroup* g, const FragGroup* end, uint32_t* depth, bool mask, uint64_t& fragments,
+                     uint64_t& passed) {
+    uint64_t frag = 0, pass = 0;
+    for (; g != end; ++g)
+        for (uint32_t l = 0; l < 4; ++l) {
+            if (!(g->lanes >> l & 1)) continue;
+            ++frag;
+            const uint32_t incoming = g->z[l], stored = depth[g->pixel + l];
+            const bool ok = depthTest(F, incoming, stored);
+            pass += ok;
+            depth[g->pixel + l] = ok && mask ? incoming : stored;
+        }
+    fragments += frag;
+    passed += pass;
+}
+
+#ifdef CULLIDE_RASTER_AVX2
+template <DepthFunc F>
+__attribute__((target("avx2"))) void replayFragmentsAvx2(const FragGroup* g, const FragGroup* end, uint32_t* depth,
+                                                        bool mask, uint64_t& fragments, uint64_t& passed) {
+    uint64_t frag = 0, pass = 0;
+    for (; g != end; ++g) {
+        const __m128i lanes = _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[g->lanes]));
+        const __m128i incoming = _mm_loadu_si128(reinterpret_cast<const __m128i*>(g->z));
+        int* d = reinterpret_cast<int*>(depth + g->pixel);
+        const __m128i ok = depthTest4<F>(incoming, _mm_maskload_epi32(d, lanes), lanes);
+        const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
+        frag += uint64_t(std::popcount(g->lanes));
+        pass += uint64_t(std::popcount(unsigned(okBits)));
+        if (mask && okBits != 0) _mm_maskstore_epi32(d, ok, incoming);
     }
     fragments += frag;
     passed += pass;
@@ -264,33 +370,47 @@ void rasterizeConservative(const ConsRec& r, int bx0, int by0, int bx1, int by1,
     passed += pass;
 }
 
-using RasterFn = void (*)(const EdgeTri&, int, int, int, int, uint32_t*, size_t, bool, int, uint64_t&, uint64_t&);
+using RasterFn = void (*)(const EdgeTri&, int, int, int, int, uint32_t*, size_t, bool, int, uint64_t&, uint64_t&,
+                          FragGroup*&);
+using ReplayFn = void (*)(const FragGroup*, const FragGroup*, uint32_t*, bool, uint64_t&, uint64_t&);
 
-template <bool Float>
-constexpr std::array<RasterFn, 8> rasterTable() {
-    return {&rasterizeInTile<DepthFunc::Never, Float>,   &rasterizeInTile<DepthFunc::Less, Float>,
-            &rasterizeInTile<DepthFunc::Equal, Float>,   &rasterizeInTile<DepthFunc::LEqual, Float>,
-            &rasterizeInTile<DepthFunc::Greater, Float>, &rasterizeInTile<DepthFunc::NotEqual, Float>,
-            &rasterizeInTile<DepthFunc::GEqual, Float>,  &rasterizeInTile<DepthFunc::Always, Float>};
+// The pixel loops for one CPU and depth format, indexed by DepthFunc: rasterizing (raster),
+// rasterizing and recording (record), replaying (replay).
+struct RasterTable {
+    std::array<RasterFn, 8> raster, record;
+    std::array<ReplayFn, 8> replay;
+};
+
+template <template <DepthFunc, bool, bool> class K, bool Float, size_t... F>
+constexpr RasterTable makeTable(std::index_sequence<F...>) {
+    return {std::array<RasterFn, 8>{K<DepthFunc(F), Float, false>::run...},
+            std::array<RasterFn, 8>{K<DepthFunc(F), Float, true>::run...},
+            std::array<ReplayFn, 8>{K<DepthFunc(F), Float, false>::replay...}};
 }
+
+template <DepthFunc F, bool Float, bool Record>
+struct ScalarKernel {
+    static constexpr RasterFn run = &rasterizeInTile<F, Float, Record>;
+    static constexpr ReplayFn replay = &replayFragments<F>;
+};
 
 #ifdef CULLIDE_RASTER_AVX2
-template <bool Float>
-constexpr std::array<RasterFn, 8> rasterTableAvx2() {
-    return {&rasterizeInTileAvx2<DepthFunc::Never, Float>,   &rasterizeInTileAvx2<DepthFunc::Less, Float>,
-            &rasterizeInTileAvx2<DepthFunc::Equal, Float>,   &rasterizeInTileAvx2<DepthFunc::LEqual, Float>,
-            &rasterizeInTileAvx2<DepthFunc::Greater, Float>, &rasterizeInTileAvx2<DepthFunc::NotEqual, Float>,
-            &rasterizeInTileAvx2<DepthFunc::GEqual, Float>,  &rasterizeInTileAvx2<DepthFunc::Always, Float>};
-}
+template <DepthFunc F, bool Float, bool Record>
+struct Avx2Kernel {
+    static constexpr RasterFn run = &rasterizeInTileAvx2<F, Float, Record>;
+    static constexpr ReplayFn replay = &replayFragmentsAvx2<F>;
+};
 #endif
 
-// The hot loop for this CPU: AVX2 when asked for and present, else the scalar loop.
-std::array<RasterFn, 8> pickRasterTable(bool isFloat, bool simd) {
+// The hot loops for this CPU: AVX2 when asked for and present, else the scalar loops.
+RasterTable pickRasterTable(bool isFloat, bool simd) {
+    constexpr auto funcs = std::make_index_sequence<8>();
 #ifdef CULLIDE_RASTER_AVX2
-    if (simd && __builtin_cpu_supports("avx2")) return isFloat ? rasterTableAvx2<true>() : rasterTableAvx2<false>();
+    if (simd && __builtin_cpu_supports("avx2"))
+        return isFloat ? makeTable<Avx2Kernel, true>(funcs) : makeTable<Avx2Kernel, false>(funcs);
 #endif
     (void)simd;
-    return isFloat ? rasterTable<true>() : rasterTable<false>();
+    return isFloat ? makeTable<ScalarKernel, true>(funcs) : makeTable<ScalarKernel, false>(funcs);
 }
 
 // First index in [lo, hi) of `v` with v[idx] >= key, searching outwards from `hint` (galloping).
@@ -799,10 +919,22 @@ private:
                         if (stamp[t] != k) stamp[t] = k, visit(t);
                     }
         };
+        // A draw of the same records as the event before it (reducePCS draws each object twice in
+        // a row) has the same tiles: copied, within a block.
+        auto sameAsPrevious = [&](size_t k, size_t blockStart) {
+            if (k == blockStart) return false;
+            const Event &e = events_[k], &f = events_[k - 1];
+            return !e.clear && !e.intervalClear && !f.clear && !f.intervalClear && e.conservative == f.conservative &&
+                   e.recBegin == f.recBegin && e.recEnd == f.recEnd;
+        };
         parallelForEach(0, eventBlocks, [&](size_t blk) {
             std::vector<uint32_t> stamp(nTiles, UINT32_MAX);
-            for (size_t k = blk * kEventBlock; k < std::min(events_.size(), (blk + 1) * kEventBlock); ++k)
-                eachTile(events_[k], stamp, uint32_t(k), [&](size_t) { ++eventTileStart_[k + 1]; });
+            for (size_t k = blk * kEventBlock; k < std::min(events_.size(), (blk + 1) * kEventBlock); ++k) {
+                if (sameAsPrevious(k, blk * kEventBlock))
+                    eventTileStart_[k + 1] = eventTileStart_[k];
+                else
+                    eachTile(events_[k], stamp, uint32_t(k), [&](size_t) { ++eventTileStart_[k + 1]; });
+            }
         });
         for (size_t k = 0; k < events_.size(); ++k) eventTileStart_[k + 1] += eventTileStart_[k];
         eventTiles_.resize(eventTileStart_.back());
@@ -810,7 +942,10 @@ private:
             std::vector<uint32_t> stamp(nTiles, UINT32_MAX);
             for (size_t k = blk * kEventBlock; k < std::min(events_.size(), (blk + 1) * kEventBlock); ++k) {
                 uint32_t* out = eventTiles_.data() + eventTileStart_[k];
-                eachTile(events_[k], stamp, uint32_t(k), [&](size_t t) { *out++ = uint32_t(t); });
+                if (sameAsPrevious(k, blk * kEventBlock))
+                    std::copy(eventTiles_.data() + eventTileStart_[k - 1], eventTiles_.data() + eventTileStart_[k], out);
+                else
+                    eachTile(events_[k], stamp, uint32_t(k), [&](size_t t) { *out++ = uint32_t(t); });
             }
         });
         binToTileSets(
@@ -823,7 +958,7 @@ private:
         // Step 6: one task per tile.
         const size_t tiles = size_t(tilesX_) * size_t(tilesY_);
         const bool isFloat = view_.depth.kind == DepthFormat::Kind::Float32;
-        const std::array<RasterFn, 8> table = pickRasterTable(isFloat, options_.simd);
+        const RasterTable table = pickRasterTable(isFloat, options_.simd);
         const int bits = view_.depth.bits, ts = options_.tileSize, W = view_.width, H = view_.height;
         parallelFor(0, tiles, 1, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t tile = r.begin(); tile != r.end(); ++tile) {
@@ -835,6 +970,8 @@ private:
                 const uint32_t* recs = tileRecs_.data() + tileRecStart_[tile];
                 const size_t nrecs = tileRecStart_[tile + 1] - tileRecStart_[tile];
                 size_t hint = 0, consHint = 0;
+                FragCache& cache = frags_.local();
+                cache.reset(tileEvStart_[tile + 1] - tileEvStart_[tile]);
                 for (uint32_t k = tileEvStart_[tile]; k < tileEvStart_[tile + 1]; ++k) {
                     const Event& e = events_[tileEvs_[k]];
                     if (e.clear) {
@@ -867,21 +1004,41 @@ private:
                         }
                         continue;
                     }
-                    size_t p = gallopLowerBound(recs, nrecs, hint, e.recBegin);
-                    const RasterFn fn = table[size_t(e.func)];
                     const uint64_t before = out.passed;
-                    for (; p < nrecs && recs[p] < e.recEnd; ++p) {
-                        // A tile's records are scattered through records_: fetch ahead (no effect
-                        // on results).
-                        if (p + kPrefetch < nrecs) {
-                            const char* ahead = reinterpret_cast<const char*>(&records_[recs[p + kPrefetch]]);
-                            __builtin_prefetch(ahead);
-                            __builtin_prefetch(ahead + 64);
+                    FragCache::Entry& seen = cache.find(e.recBegin, e.recEnd);
+                    if (seen.recBegin == e.recBegin && seen.recEnd == e.recEnd) {
+                        table.replay[size_t(e.func)](cache.groups.data() + seen.start, cache.groups.data() + seen.stop,
+                                                     depth_.data(), e.mask, out.fragments, out.passed);
+                    } else {
+                        // Rasterize and record, while the groups fit.
+                        FragGroup* const groups = cache.groups.data();
+                        FragGroup* w = groups + cache.used;
+                        bool record = true;
+                        size_t p = gallopLowerBound(recs, nrecs, hint, e.recBegin);
+                        for (; p < nrecs && recs[p] < e.recEnd; ++p) {
+                            // A tile's records are scattered through records_: fetch ahead (no
+                            // effect on results).
+                            if (p + kPrefetch < nrecs) {
+                                const char* ahead = reinterpret_cast<const char*>(&records_[recs[p + kPrefetch]]);
+                                __builtin_prefetch(ahead);
+                                __builtin_prefetch(ahead + 64);
+                            }
+                            const EdgeTri& tri = records_[recs[p]];
+                            if (record) {  // room for one group per pixel of the clipped rectangle
+                                const int64_t cw = std::min<int>(tri.x1, bx1) - std::max<int>(tri.x0, bx0) + 1;
+                                const int64_t ch = std::min<int>(tri.y1, by1) - std::max<int>(tri.y0, by0) + 1;
+                                record = cw <= 0 || ch <= 0 || int64_t(groups + kFragCap - w) >= cw * ch;
+                            }
+                            (record ? table.record : table.raster)[size_t(e.func)](
+                                tri, bx0, by0, bx1, by1, depth_.data(), size_t(W), e.mask, bits, out.fragments,
+                                out.passed, w);
                         }
-                        fn(records_[recs[p]], bx0, by0, bx1, by1, depth_.data(), size_t(W), e.mask, bits, out.fragments,
-                           out.passed);
+                        hint = p;
+                        if (record) {
+                            seen = {e.recBegin, e.recEnd, uint32_t(cache.used), uint32_t(w - groups)};
+                            cache.used = size_t(w - groups);
+                        }
                     }
-                    hint = p;
                     const uint64_t n = out.passed - before;
                     if (e.query >= 0 && n > 0) {
                         if (!out.queries.empty() && out.queries.back().query == uint32_t(e.query))
@@ -945,6 +1102,7 @@ private:
     std::vector<size_t> eventTileStart_;  // per event, its run in eventTiles_
     std::vector<uint32_t> eventTiles_;    // the tiles each event's records touch
     std::vector<TileOut> tileOut_;
+    tbb::enumerable_thread_specific<FragCache> frags_;  // per thread
 
     // Conservative mode: the interval buffer, toWindow's error bound, records and bins.
     std::vector<uint32_t> ilo_, ihi_;
