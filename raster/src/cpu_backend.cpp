@@ -927,26 +927,29 @@ private:
             return !e.clear && !e.intervalClear && !f.clear && !f.intervalClear && e.conservative == f.conservative &&
                    e.recBegin == f.recBegin && e.recEnd == f.recEnd;
         };
+        // One pass per block into the block's list, then the blocks concatenated.
+        if (blockTiles_.size() < eventBlocks) blockTiles_.resize(eventBlocks);
         parallelForEach(0, eventBlocks, [&](size_t blk) {
             std::vector<uint32_t> stamp(nTiles, UINT32_MAX);
+            std::vector<uint32_t>& out = blockTiles_[blk];
+            out.clear();
             for (size_t k = blk * kEventBlock; k < std::min(events_.size(), (blk + 1) * kEventBlock); ++k) {
-                if (sameAsPrevious(k, blk * kEventBlock))
-                    eventTileStart_[k + 1] = eventTileStart_[k];
-                else
-                    eachTile(events_[k], stamp, uint32_t(k), [&](size_t) { ++eventTileStart_[k + 1]; });
+                const size_t before = out.size();
+                if (sameAsPrevious(k, blk * kEventBlock)) {
+                    const size_t n = eventTileStart_[k];  // the previous event's count, the last n entries
+                    out.resize(before + n);
+                    std::copy_n(out.begin() + ptrdiff_t(before - n), n, out.begin() + ptrdiff_t(before));
+                } else {
+                    eachTile(events_[k], stamp, uint32_t(k), [&](size_t t) { out.push_back(uint32_t(t)); });
+                }
+                eventTileStart_[k + 1] = out.size() - before;
             }
         });
         for (size_t k = 0; k < events_.size(); ++k) eventTileStart_[k + 1] += eventTileStart_[k];
         eventTiles_.resize(eventTileStart_.back());
         parallelForEach(0, eventBlocks, [&](size_t blk) {
-            std::vector<uint32_t> stamp(nTiles, UINT32_MAX);
-            for (size_t k = blk * kEventBlock; k < std::min(events_.size(), (blk + 1) * kEventBlock); ++k) {
-                uint32_t* out = eventTiles_.data() + eventTileStart_[k];
-                if (sameAsPrevious(k, blk * kEventBlock))
-                    std::copy(eventTiles_.data() + eventTileStart_[k - 1], eventTiles_.data() + eventTileStart_[k], out);
-                else
-                    eachTile(events_[k], stamp, uint32_t(k), [&](size_t t) { *out++ = uint32_t(t); });
-            }
+            std::copy(blockTiles_[blk].begin(), blockTiles_[blk].end(),
+                      eventTiles_.begin() + ptrdiff_t(eventTileStart_[blk * kEventBlock]));
         });
         binToTileSets(
             events_.size(),
@@ -1101,6 +1104,7 @@ private:
     std::vector<uint32_t> tileEvStart_, tileEvs_;
     std::vector<size_t> eventTileStart_;  // per event, its run in eventTiles_
     std::vector<uint32_t> eventTiles_;    // the tiles each event's records touch
+    std::vector<std::vector<uint32_t>> blockTiles_;  // eventTiles_ per block of events, before concatenation
     std::vector<TileOut> tileOut_;
     tbb::enumerable_thread_specific<FragCache> frags_;  // per thread
 
