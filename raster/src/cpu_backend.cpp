@@ -18,8 +18,9 @@
 //      bin each to the tiles its records touch (a clear touches all tiles);
 //   6. one task per tile walks its events in order; for a draw it finds the draw's records in
 //      the tile's list by galloping from the previous position (cheap for reducePCS's runs of
-//      neighbouring and repeated ranges) and rasterizes them clipped to the tile. Query counts go
-//      to a per-tile sparse list of (query, count), in query order;
+//      neighbouring and repeated ranges) and rasterizes them clipped to the tile, recording the
+//      fragments; a later draw of the same records in the tile replays them (FragCache). Query
+//      counts go to a per-tile sparse list of (query, count), in query order;
 //   7. sum the per-tile lists into the results (integers: order-free).
 // Every pixel is owned by exactly one tile and processed in command order, so the depth buffer
 // and the counts do not depend on scheduling.
@@ -105,7 +106,7 @@ struct alignas(64) TileOut {
 // draw replays them in the same order instead of rasterizing again: same counts, same buffer.
 // A group is up to four consecutive pixels of one row.
 struct FragGroup {
-    uint32_t pixel;  // depth-buffer index of lane 0
+    uint32_t pixel;  // depth-buffer index of lane 0 (viewports have at most 16384^2 = 2^28 pixels)
     uint32_t lanes;  // bit l set: pixel + l is a fragment
     uint32_t z[4];   // incoming depth codes, per lane
 };
