@@ -1,6 +1,7 @@
 // Shared by the benchmarks: the workloads they compare.
 #pragma once
 
+#include "cullide/cullide.h"
 #include "cullide/depth_backend.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
@@ -16,32 +17,11 @@
 // command list, over consecutive objects of `perObject` triangles (0: the whole mesh).
 inline cullide::CommandList reducePcsList(uint32_t triangles, uint32_t perObject) {
     if (perObject == 0) perObject = triangles;
-    std::vector<std::pair<uint32_t, uint32_t>> objects;
-    for (uint32_t f = 0; f < triangles; f += perObject) objects.push_back({f, std::min(perObject, triangles - f)});
-    using namespace cullide;
-    CommandList l;
-    l.clear(1.0);
-    for (const auto& [first, count] : objects) {
-        l.depthMask(true);
-        l.depthFunc(DepthFunc::Less);
-        l.draw(first, count);
-        l.depthMask(false);
-        l.depthFunc(DepthFunc::Greater);
-        l.beginQuery();
-        l.draw(first, count);
-        l.endQuery();
-    }
-    l.clear(1.0);
-    for (auto it = objects.rbegin(); it != objects.rend(); ++it) {
-        l.depthMask(false);
-        l.depthFunc(DepthFunc::Greater);
-        l.beginQuery();
-        l.draw(it->first, it->second);
-        l.endQuery();
-        l.depthMask(true);
-        l.depthFunc(DepthFunc::Less);
-        l.draw(it->first, it->second);
-    }
+    std::vector<cullide::TriangleRange> ranges;
+    for (uint32_t f = 0; f < triangles; f += perObject) ranges.push_back({f, std::min(perObject, triangles - f)});
+    std::vector<uint32_t> forward(ranges.size()), reverse(ranges.size());
+    cullide::CommandList l;
+    cullide::appendModifiedReducePcs(l, ranges, forward, reverse);
     return l;
 }
 
@@ -59,4 +39,25 @@ inline const cullide::Mesh& benchMesh(int which) {
         m = cullide::loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/bunny75k.off");
     }
     return cache.emplace(which, std::move(m)).first->second;
+}
+
+// The paper's scenes at frame 0, built once per (which, triangles): 0 = the deformed bunny
+// (make-scene bunny), 1 = two cows merged into one object (make-scene cows), 2 = 12 cylinders.
+inline const cullide::Scene& paperScene(int which, size_t triangles) {
+    static std::map<std::pair<int, size_t>, cullide::Scene> cache;
+    auto it = cache.find({which, triangles});
+    if (it == cache.end()) {
+        cullide::SceneRequest r;
+        r.triangles = triangles;
+        cullide::Animation a;
+        if (which == 2) {
+            a = cullide::makeCylinders(12, r);
+        } else {
+            const cullide::Mesh source = cullide::loadMesh(std::string(CULLIDE_DATA_DIR) +
+                                                           (which == 0 ? "/meshes/bunny.off" : "/meshes/cow.off"));
+            a = which == 0 ? cullide::makeDeformedBunny(source, r) : cullide::makeTwoCows(source, r);
+        }
+        it = cache.emplace(std::make_pair(which, triangles), a.sceneAt(0)).first;
+    }
+    return it->second;
 }

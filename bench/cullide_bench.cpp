@@ -14,6 +14,8 @@
 #include "cullide/mesh_io.h"
 #include "cullide/raster/cpu_backend.h"
 
+#include "bench_util.h"
+
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -21,19 +23,6 @@
 namespace {
 
 using namespace cullide;
-
-const Scene& paperScene(int which, size_t triangles) {
-    static std::map<std::pair<int, size_t>, Scene> cache;
-    auto it = cache.find({which, triangles});
-    if (it == cache.end()) {
-        SceneRequest r;
-        r.triangles = triangles;
-        const Mesh source = loadMesh(std::string(CULLIDE_DATA_DIR) + (which == 0 ? "/meshes/bunny.off" : "/meshes/cow.off"));
-        Animation a = which == 0 ? makeDeformedBunny(source, r) : makeTwoCows(source, r);
-        it = cache.emplace(std::make_pair(which, triangles), a.sceneAt(0)).first;
-    }
-    return it->second;
-}
 
 void BM_Prune(benchmark::State& state) {
     const Scene& scene = paperScene(int(state.range(0)), size_t(state.range(1)));

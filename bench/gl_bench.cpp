@@ -34,7 +34,8 @@ using Clock = std::chrono::steady_clock;
 
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
-raster::GlBackend* sharedGl(std::string& why) {
+// The process's one GL backend, or null after marking the benchmark skipped with the reason.
+raster::GlBackend* sharedGlOrSkip(benchmark::State& state) {
     static std::string reason;
     static std::unique_ptr<raster::GlBackend> gl = [] {
         try {
@@ -44,10 +45,9 @@ raster::GlBackend* sharedGl(std::string& why) {
             return std::unique_ptr<raster::GlBackend>();
         }
     }();
-    why = reason;
+    if (!gl) state.SkipWithError(("no GL context: " + reason).c_str());
     return gl.get();
 }
-
 
 void report(benchmark::State& state, double cpuMs, double glMs) {
     state.counters["cpu_ms"] = cpuMs;
@@ -56,12 +56,8 @@ void report(benchmark::State& state, double cpuMs, double glMs) {
 }
 
 void BM_CpuVsGl_ReducePcs(benchmark::State& state) {
-    std::string why;
-    raster::GlBackend* gl = sharedGl(why);
-    if (!gl) {
-        state.SkipWithError(("no GL context: " + why).c_str());
-        return;
-    }
+    raster::GlBackend* gl = sharedGlOrSkip(state);
+    if (!gl) return;
     const Mesh& mesh = benchMesh(int(state.range(0)));
     const uint32_t all = uint32_t(mesh.triangleCount());
     const TriangleRange range{0, all};
@@ -101,12 +97,8 @@ BENCHMARK(BM_CpuVsGl_ReducePcs)
     ->UseRealTime();
 
 void BM_CpuVsGl_Prune(benchmark::State& state) {
-    std::string why;
-    raster::GlBackend* gl = sharedGl(why);
-    if (!gl) {
-        state.SkipWithError(("no GL context: " + why).c_str());
-        return;
-    }
+    raster::GlBackend* gl = sharedGlOrSkip(state);
+    if (!gl) return;
     const char* names[] = {"bunny_through_cow.json", "two_cows_and_bunny.json"};
     const Animation a = loadScene(std::string(CULLIDE_DATA_DIR) + "/scenes/" + names[state.range(0)]);
     const Scene scene = a.sceneAt(a.frameCount() / 2);

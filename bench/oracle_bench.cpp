@@ -44,13 +44,10 @@ const Mesh& benchMesh(int which) {
             Transform t = Transform::Identity();
             t.translate(Vec3f(0.25f, 0.02f, 0.05f));
             t.rotate(Eigen::AngleAxisf(float(35.0 * std::numbers::pi / 180.0), Vec3f::UnitY()));
-            const uint32_t base = uint32_t(m.positions.size());
-            const size_t nt = m.triangles.size(), nv = m.positions.size();
-            for (size_t v = 0; v < nv; ++v) m.positions.push_back(applyTransform(t, m.positions[v]));
-            for (size_t i = 0; i < nt; ++i) {
-                const Triangle tri = m.triangles[i];
-                m.triangles.push_back({tri[0] + base, tri[1] + base, tri[2] + base});
-            }
+            Scene two;  // the mesh and a moved copy, as one mesh
+            two.objects.push_back({"cow", m, Transform::Identity()});
+            two.objects.push_back({"moved", m, t});
+            m = flatten(two).mesh;
         }
     }
     return cache.emplace(which, std::move(m)).first->second;

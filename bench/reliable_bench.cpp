@@ -22,6 +22,8 @@
 #include "cullide/oracle/oracle.h"
 #include "cullide/raster/cpu_backend.h"
 
+#include "bench_util.h"
+
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -30,36 +32,19 @@ namespace {
 
 using namespace cullide;
 
-const Scene& scene(int which, size_t triangles) {
-    static std::map<std::pair<int, size_t>, Scene> cache;
-    auto it = cache.find({which, triangles});
-    if (it == cache.end()) {
-        SceneRequest r;
-        r.triangles = triangles;
-        Animation a;
-        if (which == 2) {
-            a = makeCylinders(12, r);
-        } else {
-            const Mesh source =
-                loadMesh(std::string(CULLIDE_DATA_DIR) + (which == 0 ? "/meshes/bunny.off" : "/meshes/cow.off"));
-            a = which == 0 ? makeDeformedBunny(source, r) : makeTwoCows(source, r);
-        }
-        it = cache.emplace(std::make_pair(which, triangles), a.sceneAt(0)).first;
-    }
-    return it->second;
-}
-
 const oracle::Truth& truth(int which, size_t triangles) {
     static std::map<std::pair<int, size_t>, oracle::Truth> cache;
     auto it = cache.find({which, triangles});
-    if (it == cache.end()) it = cache.emplace(std::make_pair(which, triangles), oracle::findIntersections(scene(which, triangles))).first;
+    if (it == cache.end())
+        it = cache.emplace(std::make_pair(which, triangles), oracle::findIntersections(paperScene(which, triangles)))
+                 .first;
     return it->second;
 }
 
 void BM_ReliableCost(benchmark::State& state) {
     const int which = int(state.range(0));
     const size_t tris = size_t(state.range(1));
-    const Scene& s = scene(which, tris);
+    const Scene& s = paperScene(which, tris);
     auto backend = raster::makeCpuBackend();
     CullideOptions o;
     o.method = state.range(2) == 1 ? CullMethod::Modified : CullMethod::Reliable;

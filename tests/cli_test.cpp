@@ -201,6 +201,31 @@ TEST(Cli, PruneRefusesBadOptions) {
     }
 }
 
+// The same bad value gets the same message from every command, under the name the user typed:
+// `prune --depth`, `study --depths`, a spec's key `depths` (issue 12: the study once said only
+// "depth format: ...", naming no option).
+TEST(Cli, BadDepthSameMessageFromEveryCommand) {
+    const fs::path d = freshDir("same_message");
+    std::ofstream(d / "spec.json") << R"({"scenes": ["bunny:500"], "depths": [7]})";
+    const CliRun prune = cullide("prune " + quote(kData + "/meshes/cow.off") + " --depth 7");
+    const CliRun study = cullide("study --scenes bunny:500 --depths 7 -q -o " + quote((d / "a.csv").string()));
+    const CliRun spec =
+        cullide("study " + quote((d / "spec.json").string()) + " -q -o " + quote((d / "b.csv").string()));
+    // The message after `name: `, to the end of its line ("" when the name is not there).
+    auto cause = [](const CliRun& r, const std::string& name) {
+        const size_t at = r.output.find(name + ": ");
+        if (at == std::string::npos) return std::string();
+        const size_t from = at + name.size() + 2;
+        return r.output.substr(from, r.output.find('\n', from) - from);
+    };
+    for (const CliRun* r : {&prune, &study, &spec}) EXPECT_EQ(r->status, 2) << r->output;
+    const std::string expected = cause(prune, "option --depth");
+    EXPECT_NE(expected.find("8 to 32"), std::string::npos) << prune.output;
+    EXPECT_EQ(cause(study, "option --depths"), expected) << study.output;
+    EXPECT_EQ(cause(spec, "field 'depths'"), expected) << spec.output;
+    EXPECT_FALSE(fs::exists(d / "a.csv") || fs::exists(d / "b.csv")) << "a refused study wrote its output";
+}
+
 // prune --json: the PCS as sorted [object, triangle] pairs inside the scene, per-pass statistics
 // whose triangle counts chain (each call's output is the next call's input within a level), and
 // the same PCS for 1 and 2 threads; --out writes a PLY with one colour per face.

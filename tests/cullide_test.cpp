@@ -2,6 +2,7 @@
 #include "cullide/cullide.h"
 
 #include "cullide/error.h"
+#include "cullide/options.h"
 #include "cullide/raster/cpu_backend.h"
 
 #include "test_util.h"
@@ -19,6 +20,7 @@
 using namespace cullide;
 using cullide::test::box;
 using cullide::test::rotation;
+using cullide::test::sceneOf;
 
 namespace {
 
@@ -111,17 +113,6 @@ std::set<PcsTriangle> crossingTriangles(const Scene& scene) {
                     }
                 }
     return out;
-}
-
-Scene sceneOf(std::initializer_list<std::pair<Mesh, Transform>> objects) {
-    Scene s;
-    int i = 0;
-    for (const auto& [mesh, t] : objects) {
-        std::string name = "o";  // (not "o" + to_string(): GCC 12 warns falsely, -Wrestrict)
-        name += std::to_string(i++);
-        s.objects.push_back({name, mesh, t});
-    }
-    return s;
 }
 
 CullideResult prune(const Scene& scene, CullMethod method, uint32_t leafSize, HierarchyKind kind = HierarchyKind::Connectivity,

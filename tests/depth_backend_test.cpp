@@ -5,6 +5,8 @@
 #include "cullide/error.h"
 #include "cullide/raster/cpu_backend.h"
 
+#include "window_geometry.h"
+
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
@@ -106,32 +108,15 @@ TEST(CommandList, RejectsNestedAndUnbalancedQueries) {
     EXPECT_FALSE(l.queryOpen());
 }
 
-struct TwoQuads {
-    std::vector<Vec3f> positions;
-    std::vector<Triangle> triangles;
+struct TwoQuads : test::Geo {
     // Quad 0 at depth z0 (triangles 0,1), quad 1 at depth z1 (triangles 2,3), both covering
     // the whole view box [0,4] x [0,4].
     TwoQuads(float z0, float z1) {
-        for (float z : {z0, z1}) {
-            const uint32_t b = uint32_t(positions.size());
-            positions.insert(positions.end(), {Vec3f(0, 0, z), Vec3f(4, 0, z), Vec3f(4, 4, z), Vec3f(0, 4, z)});
-            triangles.push_back({b, b + 1, b + 2});
-            triangles.push_back({b, b + 2, b + 3});
-        }
+        for (float z : {z0, z1}) quad(0, 0, 4, 4, z);
     }
 };
 
-OrthoView box4() {
-    OrthoView v;
-    v.xmin = 0;
-    v.xmax = 4;
-    v.ymin = 0;
-    v.ymax = 4;
-    v.znear = 0;
-    v.zfar = 1;
-    v.width = v.height = 4;
-    return v;
-}
+OrthoView box4() { return test::windowView(4, 4); }
 
 // Trap: execute() running part of a list before finding a bad draw range or an open query.
 TEST(DepthBackend, ExecuteValidatesBeforeRunning) {

@@ -135,17 +135,10 @@ Intersections findSelfIntersections(const Mesh& m) {
 // All objects of a scene as one mesh (indices offset, so objects share no vertex index);
 // owner[t] is the object of triangle t.
 Mesh mergeWorld(const Scene& s, std::vector<uint32_t>* owner) {
-    Mesh all;
-    for (size_t i = 0; i < s.objects.size(); ++i) {
-        const Mesh w = s.worldMesh(i);
-        const uint32_t off = uint32_t(all.positions.size());
-        all.positions.insert(all.positions.end(), w.positions.begin(), w.positions.end());
-        for (const Triangle& t : w.triangles) {
-            all.triangles.push_back({t[0] + off, t[1] + off, t[2] + off});
-            if (owner) owner->push_back(uint32_t(i));
-        }
-    }
-    return all;
+    FlatScene flat = flatten(s);
+    for (uint32_t i = 0; owner && i < s.objects.size(); ++i)
+        owner->insert(owner->end(), flat.firstTriangle[i + 1] - flat.firstTriangle[i], i);
+    return std::move(flat.mesh);
 }
 
 const Mesh& bunny() {
@@ -155,6 +148,20 @@ const Mesh& bunny() {
 const Mesh& cow() {
     static const Mesh m = loadMesh(CULLIDE_DATA_DIR "/meshes/cow.off");
     return m;
+}
+
+// A request for `triangles` triangles in `frames` frames.
+SceneRequest request(size_t triangles, size_t frames) {
+    SceneRequest q;
+    q.triangles = triangles;
+    q.frames = frames;
+    return q;
+}
+
+// `a` has `frames` frames, each fitting its base scene (fatal otherwise: callers index frames).
+void assertValid(const Animation& a, size_t frames, const char* name) {
+    ASSERT_EQ(a.frameCount(), frames) << name;
+    EXPECT_NO_THROW(validateAnimation(a, name));
 }
 
 double diagonal(const Bounds& b) { return double(b.extent().norm()); }
@@ -380,12 +387,8 @@ TEST(GeneratorsBunny, SingleLocalizedIntersectionArea) {
 // Trap: the animation must start from the undeformed mesh bit for bit (frame 0), end at the
 // still scene, keep the vertex count in every frame, and cross only once the ear is down.
 TEST(GeneratorsBunny, AnimationGrowsFromRest) {
-    SceneRequest q;
-    q.triangles = 3000;
-    q.frames = 5;
-    const Animation a = makeDeformedBunny(bunny(), q);
-    ASSERT_EQ(a.frameCount(), 5u);
-    EXPECT_NO_THROW(validateAnimation(a, "bunny"));
+    const Animation a = makeDeformedBunny(bunny(), request(3000, 5));
+    ASSERT_NO_FATAL_FAILURE(assertValid(a, 5, "bunny"));
     const Mesh rest = resample(bunny(), 3000);
     for (const Frame& f : a.frames) {
         ASSERT_EQ(f.poses.size(), 1u);
@@ -423,12 +426,8 @@ TEST(GeneratorsCows, ManyCrossingsBetweenTheCopies) {
 // Trap: the moving copy must start and end clear of the first, and the middle frame is the still
 // scene; the first copy never moves.
 TEST(GeneratorsCows, SecondCowMovesThroughTheFirst) {
-    SceneRequest q;
-    q.triangles = 3000;
-    q.frames = 9;
-    const Animation a = makeTwoCows(cow(), q);
-    ASSERT_EQ(a.frameCount(), 9u);
-    EXPECT_NO_THROW(validateAnimation(a, "cows"));
+    const Animation a = makeTwoCows(cow(), request(3000, 9));
+    ASSERT_NO_FATAL_FAILURE(assertValid(a, 9, "cows"));
     const Mesh& still = a.scene.objects[0].mesh;
     const size_t half = still.vertexCount() / 2;
     const uint32_t halfT = uint32_t(still.triangleCount() / 2);
@@ -489,12 +488,8 @@ TEST(GeneratorsCylinders, DifferentSeedsDiffer) {
 // Trap: every frame must give positions for every object, with unchanged counts; frame 0 is
 // the straight (still) scene.
 TEST(GeneratorsCylinders, AnimationBendsEveryTube) {
-    SceneRequest q;
-    q.triangles = 2000;
-    q.frames = 6;
-    const Animation a = makeCylinders(20, q);
-    ASSERT_EQ(a.frameCount(), 6u);
-    EXPECT_NO_THROW(validateAnimation(a, "cylinders"));
+    const Animation a = makeCylinders(20, request(2000, 6));
+    ASSERT_NO_FATAL_FAILURE(assertValid(a, 6, "cylinders"));
     for (const Frame& f : a.frames) {
         ASSERT_EQ(f.poses.size(), 20u);
         for (size_t i = 0; i < 20; ++i) {
@@ -519,8 +514,7 @@ TEST(GeneratorsTwist, RotatesAboutTheLongestAxis) {
     for (Vec3f& p : base.positions) p.z() *= 3.0f;  // z is the longest axis
     base = subdivide(base);
     const Animation a = makeTwistAnimation(base, q);
-    ASSERT_EQ(a.frameCount(), 4u);
-    EXPECT_NO_THROW(validateAnimation(a, "twist"));
+    ASSERT_NO_FATAL_FAILURE(assertValid(a, 4, "twist"));
     EXPECT_EQ(bits(a.sceneAt(0).objects[0].mesh), bits(base));
     const Mesh end = a.sceneAt(3).objects[0].mesh;
     EXPECT_EQ(bits(end), bits(a.scene.objects[0].mesh));

@@ -8,6 +8,8 @@
 #include "cullide/raster/png.h"
 #include "cullide/raster/rules.h"
 
+#include "window_geometry.h"
+
 #include <gtest/gtest.h>
 #include <oneapi/tbb/global_control.h>
 
@@ -28,49 +30,22 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Helpers
 
-// Geometry given directly in window coordinates: the view box is [0,W] x [0,H] x [0,1].
-struct Geo {
-    std::vector<Vec3f> positions;
-    std::vector<Triangle> triangles;
-    uint32_t add(float x, float y, float z) {
-        positions.emplace_back(x, y, z);
-        return uint32_t(positions.size() - 1);
-    }
-    uint32_t tri(uint32_t a, uint32_t b, uint32_t c) {
-        triangles.push_back({a, b, c});
-        return uint32_t(triangles.size() - 1);
-    }
-    uint32_t tri(const Vec3f& a, const Vec3f& b, const Vec3f& c) {
-        return tri(add(a.x(), a.y(), a.z()), add(b.x(), b.y(), b.z()), add(c.x(), c.y(), c.z()));
-    }
-    // Axis-aligned quad at depth z (two triangles), returns the first triangle.
-    uint32_t quad(float x0, float y0, float x1, float y1, float z) {
-        const uint32_t a = add(x0, y0, z), b = add(x1, y0, z), c = add(x1, y1, z), d = add(x0, y1, z);
-        const uint32_t t = tri(a, b, c);
-        tri(a, c, d);
-        return t;
-    }
-};
+using test::backendFor;
+using test::Geo;
+using test::windowView;
 
-OrthoView windowView(int W, int H, DepthFormat format = DepthFormat::unorm(24)) {
-    OrthoView v;
-    v.xmin = 0;
-    v.xmax = W;
-    v.ymin = 0;
-    v.ymax = H;
-    v.znear = 0;
-    v.zfar = 1;
-    v.width = W;
-    v.height = H;
-    v.depth = format;
-    return v;
-}
-
-std::unique_ptr<CpuBackend> backendFor(const Geo& g, const OrthoView& view, CpuBackendOptions o = {}) {
-    auto b = makeCpuBackend(o);
-    b->setGeometry(g.positions, g.triangles);
-    b->setView(view);
-    return b;
+// A command list that clears, then counts with ALWAYS the samples of each (first, count) range of
+// triangles, one query per range.
+CommandList alwaysQueries(std::initializer_list<std::pair<uint32_t, uint32_t>> ranges) {
+    CommandList l;
+    l.clear();
+    l.depthFunc(DepthFunc::Always);
+    for (const auto& [first, count] : ranges) {
+        l.beginQuery();
+        l.draw(first, count);
+        l.endQuery();
+    }
+    return l;
 }
 
 std::string failPath(const std::string& name) { return ::testing::TempDir() + "cullide_raster_" + name + ".png"; }
@@ -316,6 +291,10 @@ TEST(Figure5a, PaperBoundOfTwoToMinusNCanBeMissedByGreater) {
 // The paper's Figure 5(b): screen resolution, on a 4x3 viewport (12 pixels, as in the figure).
 // Object 1 is triangle(s) drawn first, object 2 queried, as in figure5aForward.
 
+// Cases B and C work at D16, near stored value 1000: depths are given in steps of 1/(2^16 - 1).
+constexpr int kFigure5bBits = 16;
+const double kD16Steps = std::ldexp(1.0, kFigure5bBits) - 1;
+
 std::pair<uint64_t, uint64_t> queryBoth(const Geo& g, uint32_t first1, uint32_t n1, uint32_t first2, uint32_t n2,
                                         int bits = 16) {
     auto b = backendFor(g, windowView(4, 3, DepthFormat::unorm(bits)));
@@ -352,8 +331,7 @@ TEST(Figure5b, CaseA_OverlapWithoutAPixelCentreIsMissedByBoth) {
 // centre P1 = (1.5, 1.5); object 2 is sloped and crosses object 1 near P1, where the two depths
 // differ by a fraction of a step: Cullide (GEQUAL) reports it, GREATER does not.
 TEST(Figure5b, CaseB_OneSharedCentreWithRoundedEqualDepth) {
-    const int n = 16;
-    const double c = std::ldexp(1.0, n) - 1;
+    const double c = kD16Steps;
     const float s = float(1000.0 / c);
     const float q = float(1000.2 / c);  // behind s at P1, but the same stored value
     Geo g;
@@ -363,7 +341,7 @@ TEST(Figure5b, CaseB_OneSharedCentreWithRoundedEqualDepth) {
     const float slope = float(4.0 / c);
     auto z2 = [&](float x) { return float(double(q) + (double(x) - 1.5) * double(slope)); };
     g.tri(Vec3f(1.1f, 1.1f, z2(1.1f)), Vec3f(1.9f, 1.1f, z2(1.9f)), Vec3f(1.5f, 1.9f, z2(1.5f)));
-    const auto [gequal, greater] = queryBoth(g, 0, 1, 1, 1, n);
+    const auto [gequal, greater] = queryBoth(g, 0, 1, 1, 1, kFigure5bBits);
     EXPECT_EQ(gequal, 1u);
     EXPECT_EQ(greater, 0u);
 }
@@ -373,8 +351,7 @@ TEST(Figure5b, CaseB_OneSharedCentreWithRoundedEqualDepth) {
 // Cullide reports it whenever object 2 is behind-or-equal at P2; GREATER only when the depth
 // difference at P2 reaches a stored step.
 TEST(Figure5b, CaseC_TwoSharedCentresWithSeparatedDepths) {
-    const int n = 16;
-    const double c = std::ldexp(1.0, n) - 1;
+    const double c = kD16Steps;
     const float s = float(1000.0 / c);
     for (const double behindSteps : {1.5, 0.2}) {
         Geo g;
@@ -386,7 +363,7 @@ TEST(Figure5b, CaseC_TwoSharedCentresWithSeparatedDepths) {
                        e = g.add(2.9f, 1.9f, z2(2.9));
         g.tri(a, b, e);
         g.tri(a, e, d);
-        const auto [gequal, greater] = queryBoth(g, 0, 2, 2, 2, n);
+        const auto [gequal, greater] = queryBoth(g, 0, 2, 2, 2, kFigure5bBits);
         EXPECT_EQ(gequal, 1u) << behindSteps;                       // P2 only
         EXPECT_EQ(greater, behindSteps >= 1.0 ? 1u : 0u) << behindSteps;
     }
@@ -546,12 +523,7 @@ bool checkTiling(const Tiling& t, int W, int H, FillRule rule, int threads, cons
     o.threads = threads;
     o.tileSize = 16;
     auto b = backendFor(g, windowView(W, H), o);
-    CommandList l;
-    l.clear();
-    l.depthFunc(DepthFunc::Always);
-    l.beginQuery();
-    l.draw(0, uint32_t(g.triangles.size()));
-    l.endQuery();
+    const CommandList l = alwaysQueries({{0, uint32_t(g.triangles.size())}});
     const uint64_t count = b->execute(l)[0];
     const DepthImage img = b->readDepth();
     // Expected, exactly in 1/256 units (centres at 256 i + 128).
@@ -582,42 +554,41 @@ bool checkTiling(const Tiling& t, int W, int H, FillRule rule, int threads, cons
     return true;
 }
 
+// Checks `cases` tilings make(rng, W, H) of random W x H viewports (sides minSide to
+// minSide + spread - 1), each at a random sub-pixel offset, under both fill rules, case k with
+// threads(k) workers.
+template <typename Make, typename Threads>
+void checkRandomTilings(uint64_t seed, int cases, int minSide, int spread, const std::string& name, Make make,
+                        Threads threads) {
+    std::mt19937_64 rng(seed);
+    for (int k = 0; k < cases; ++k) {
+        const int W = minSide + int(rng() % uint64_t(spread)), H = minSide + int(rng() % uint64_t(spread));
+        const Tiling t = make(rng, W, H);
+        const double ox = double(rng() % 256) / 256, oy = double(rng() % 256) / 256;
+        for (FillRule r : {FillRule::BottomLeft, FillRule::TopLeft})
+            ASSERT_TRUE(checkTiling(t, W, H, r, threads(k), name + std::to_string(k), ox, oy));
+    }
+}
+
 // Trap: holes or double hits on shared edges and at shared vertices through pixel centres,
 // for either fill rule and either winding, under a regular grid split by random diagonals.
 TEST(FillRule, GridsCoverEachCentreOnce) {
-    std::mt19937_64 rng(2024);
-    for (int k = 0; k < 60; ++k) {
-        const int W = 8 + int(rng() % 40), H = 8 + int(rng() % 40);
-        const Tiling t = makeGrid(rng, W, H);
-        const double ox = double(rng() % 256) / 256, oy = double(rng() % 256) / 256;
-        for (FillRule r : {FillRule::BottomLeft, FillRule::TopLeft})
-            ASSERT_TRUE(checkTiling(t, W, H, r, 1 + int(k % 2), "grid" + std::to_string(k), ox, oy));
-    }
+    checkRandomTilings(2024, 60, 8, 40, "grid", makeGrid, [](int k) { return 1 + k % 2; });
 }
 
 // Trap: a vertex of high degree on a pixel centre (every fan triangle touches it: exactly one may
 // own it), and boundary points splitting the outer edges.
 TEST(FillRule, FansCoverEachCentreOnce) {
-    std::mt19937_64 rng(99);
-    for (int k = 0; k < 60; ++k) {
-        const int W = 6 + int(rng() % 30), H = 6 + int(rng() % 30);
-        const Tiling t = makeFan(rng, W, H);
-        const double ox = double(rng() % 256) / 256, oy = double(rng() % 256) / 256;
-        for (FillRule r : {FillRule::BottomLeft, FillRule::TopLeft})
-            ASSERT_TRUE(checkTiling(t, W, H, r, 2, "fan" + std::to_string(k), ox, oy));
-    }
+    checkRandomTilings(99, 60, 6, 30, "fan", makeFan, [](int) { return 2; });
 }
 
 // Trap: slivers, steep and nearly horizontal edges, and vertices of any degree in a random soup.
 TEST(FillRule, RandomSoupsCoverEachCentreOnce) {
-    std::mt19937_64 rng(4242);
-    for (int k = 0; k < 40; ++k) {
-        const int W = 10 + int(rng() % 60), H = 10 + int(rng() % 60);
-        const Tiling t = makeSoup(rng, W, H, 30 + int(rng() % 300));
-        const double ox = double(rng() % 256) / 256, oy = double(rng() % 256) / 256;
-        for (FillRule r : {FillRule::BottomLeft, FillRule::TopLeft})
-            ASSERT_TRUE(checkTiling(t, W, H, r, 2, "soup" + std::to_string(k), ox, oy));
-    }
+    auto soup = [](std::mt19937_64& rng, int W, int H) {
+        const int inserts = 30 + int(rng() % 300);
+        return makeSoup(rng, W, H, inserts);
+    };
+    checkRandomTilings(4242, 40, 10, 60, "soup", soup, [](int) { return 2; });
 }
 
 // Trap: the two rules differing anywhere but on horizontal edges through centres: a triangle
@@ -702,12 +673,7 @@ TEST(Clipping, TrianglesCrossingNearAndFarAreClippedNotClamped) {
         CpuBackendOptions o;
         o.scalarReference = ref;
         auto bk = backendFor(g, windowView(16, 4, DepthFormat::float32()), o);
-        CommandList l;
-        l.clear(1.0);
-        l.depthFunc(DepthFunc::Always);
-        l.beginQuery();
-        l.draw(0, 2);
-        l.endQuery();
+        const CommandList l = alwaysQueries({{0, 2}});
         const auto r = bk->execute(l);
         EXPECT_EQ(r[0], 8u * 4u);  // columns 4..11 (centres 4.5 .. 11.5)
         EXPECT_EQ(bk->lastStats().clipped, 2u);
@@ -732,12 +698,7 @@ TEST(Clipping, TrianglesOutsideAreRejected) {
     g.tri(Vec3f(-5, 0, 0.5f), Vec3f(-1, 0, 0.5f), Vec3f(-1, 4, 0.5f));
     g.tri(Vec3f(0, 4.01f, 0.5f), Vec3f(4, 5, 0.5f), Vec3f(0, 9, 0.5f));
     auto b = backendFor(g, windowView(4, 4));
-    CommandList l;
-    l.clear();
-    l.depthFunc(DepthFunc::Always);
-    l.beginQuery();
-    l.draw(0, 4);
-    l.endQuery();
+    const CommandList l = alwaysQueries({{0, 4}});
     EXPECT_EQ(b->execute(l)[0], 0u);
     EXPECT_EQ(b->lastStats().rejected, 4u);
     EXPECT_EQ(b->lastStats().fragments, 0u);
@@ -753,15 +714,7 @@ TEST(Clipping, HugeTrianglesBeyondTheGuardBandStillCoverTheViewport) {
         CpuBackendOptions o;
         o.scalarReference = ref;
         auto b = backendFor(g, windowView(37, 23), o);
-        CommandList l;
-        l.clear();
-        l.depthFunc(DepthFunc::Always);
-        l.beginQuery();
-        l.draw(0, 1);
-        l.endQuery();
-        l.beginQuery();
-        l.draw(1, 1);
-        l.endQuery();
+        const CommandList l = alwaysQueries({{0, 1}, {1, 1}});
         const auto r = b->execute(l);
         EXPECT_EQ(r[0], 37u * 23u);
         // Second: on or above the line y = 5.5 (the row-5 centres lie on it, and it is a bottom
@@ -783,12 +736,7 @@ TEST(Degenerate, EdgeOnTrianglesProduceNothingAndAreCounted) {
         CpuBackendOptions o;
         o.scalarReference = ref;
         auto b = backendFor(g, windowView(8, 8), o);
-        CommandList l;
-        l.clear();
-        l.depthFunc(DepthFunc::Always);
-        l.beginQuery();
-        l.draw(0, 3);
-        l.endQuery();
+        const CommandList l = alwaysQueries({{0, 3}});
         EXPECT_EQ(b->execute(l)[0], 0u);
         EXPECT_EQ(b->lastStats().zeroArea, 3u);
         EXPECT_EQ(b->lastStats().fragments, 0u);

@@ -27,6 +27,7 @@
 
 using namespace cullide;
 using cullide::test::box;
+using cullide::test::sceneOf;
 
 namespace {
 
@@ -69,17 +70,6 @@ Mesh selfCrossingRibbon(int segments) {
         m.triangles.push_back({2 * i, 2 * i + 3, 2 * i + 1});
     }
     return m;
-}
-
-Scene sceneOf(std::initializer_list<std::pair<Mesh, Transform>> objects) {
-    Scene s;
-    int i = 0;
-    for (const auto& [mesh, t] : objects) {
-        std::string name = "o";  // (not "o" + to_string(): GCC 12 warns falsely, -Wrestrict)
-        name += std::to_string(i++);
-        s.objects.push_back({name, mesh, t});
-    }
-    return s;
 }
 
 struct Outcome {

@@ -41,6 +41,17 @@ std::string paramName(const std::string& path) {
 
 namespace cullide::test {
 
+Scene sceneOf(std::initializer_list<std::pair<Mesh, Transform>> objects) {
+    Scene s;
+    int i = 0;
+    for (const auto& [mesh, t] : objects) {
+        std::string name = "o";  // (not "o" + to_string(): GCC 12 warns falsely, -Wrestrict)
+        name += std::to_string(i++);
+        s.objects.push_back({name, mesh, t});
+    }
+    return s;
+}
+
 Mesh box(const Vec3f& lo, const Vec3f& hi) {
     Mesh m;
     for (int i = 0; i < 8; ++i)

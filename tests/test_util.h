@@ -4,12 +4,17 @@
 #include "cullide/scene.h"
 
 #include <filesystem>
+#include <initializer_list>
 #include <string>
+#include <utility>
 
 namespace cullide::test {
 
 // CULLIDE_TEST_DATA_DIR "/" relative, e.g. testData("good/polys.off").
 std::string testData(const char* relative);
+
+// A scene of the given (mesh, transform) objects, named o0, o1, ...
+Scene sceneOf(std::initializer_list<std::pair<Mesh, Transform>> objects);
 
 // A closed box [lo, hi] of 12 triangles (two per face).
 Mesh box(const Vec3f& lo, const Vec3f& hi);

@@ -29,6 +29,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 CAUSES = ["depth_rounding", "sampling", "edge_on", "untested", "unexplained"]
 
 
+def finish(fig, ax, out, name, xlabel, ylabel, title, legend_size=None):
+    """Axis labels, title, grid and legend of a chart, then save it."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=legend_size)
+    save(fig, out, name)
+
+
 def save(fig, out, name):
     for ext in ("png", "svg"):
         path = os.path.join(out, f"{name}.{ext}")
@@ -92,12 +102,8 @@ def speed_vs_accuracy(rows, out):
     ax.step([p[0] for p in front], [p[1] for p in front], where="post", color="tab:red", label="Pareto front", zorder=2)
     ax.scatter([p[0] for p in front], [p[1] for p in front], s=40, facecolors="none", edgecolors="tab:red", zorder=4)
     ax.set_xscale("log")
-    ax.set_xlabel("time per configuration (ms, sum of medians over scenes)")
-    ax.set_ylabel("false prunes (% of colliding triangles)")
-    ax.set_title("Speed against accuracy")
-    ax.grid(alpha=0.3)
-    ax.legend()
-    save(fig, out, "speed_vs_accuracy")
+    finish(fig, ax, out, "speed_vs_accuracy", "time per configuration (ms, sum of medians over scenes)",
+           "false prunes (% of colliding triangles)", "Speed against accuracy")
 
 
 def figure8(rows, out, paper=True):
@@ -123,12 +129,8 @@ def figure8(rows, out, paper=True):
     if paper:
         ax.plot([5, 270], [20, 600], "k--", alpha=0.5, label="paper: bunny 20-600 ms (FX 5900 Ultra)")
         ax.plot([3, 270], [35, 1000], "k:", alpha=0.5, label="paper: cows 35-1000 ms (FX 5900 Ultra)")
-    ax.set_xlabel("triangles (thousands)")
-    ax.set_ylabel("pruning time (ms)")
-    ax.set_title("Time vs triangle count (the paper's Figure 8)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    save(fig, out, "figure8_time_vs_triangles")
+    finish(fig, ax, out, "figure8_time_vs_triangles", "triangles (thousands)", "pruning time (ms)",
+           "Time vs triangle count (the paper's Figure 8)", legend_size=7)
 
 
 def pass_charts(passes, total, title, out, name):
@@ -166,12 +168,8 @@ def figure11(curves, out):
     fig, ax = plt.subplots(figsize=(6, 4.5))
     for label, (x, y) in curves:
         ax.plot(x, y, marker=".", label=label)
-    ax.set_xlabel("accumulated % of the triangles pruned")
-    ax.set_ylabel("accumulated % of the time")
-    ax.set_title("Relative pruning performance (the paper's Figure 11)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    save(fig, out, "figure11_accumulated")
+    finish(fig, ax, out, "figure11_accumulated", "accumulated % of the triangles pruned", "accumulated % of the time",
+           "Relative pruning performance (the paper's Figure 11)", legend_size=8)
 
 
 def causes_chart(rows, out):
@@ -229,12 +227,7 @@ def rate_chart(rows, xkey, groupkeys, title, xlabel, name, out, logx=False, vlin
     if logx:
         ax.set_xscale("log")
     ax.set_ylim(-3, 103)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("trials with no false prune (%)")
-    ax.set_title(title)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    save(fig, out, name)
+    finish(fig, ax, out, name, xlabel, "trials with no false prune (%)", title, legend_size=7)
 
 
 def plot_stability(rows, out):

@@ -10,9 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
-#include <sstream>
 
 namespace cullide {
 
@@ -58,56 +56,6 @@ std::vector<Vec3d> spreadDirections(uint32_t n) {
     return dirs;
 }
 
-std::pair<int, int> parseResolution(const std::string& text) {
-    const std::string source = "option --resolution";
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) == 3 && (x == 'x' || x == 'X')) {
-    } else if (std::sscanf(text.c_str(), "%d%c", &w, &extra) == 1) {
-        h = w;
-    } else {
-        throw InputError(source, "cannot read '" + text + "' (expected N or WxH, e.g. 500 or 640x480)");
-    }
-    if (w < 1 || h < 1 || w > 16384 || h > 16384)
-        throw InputError(source, "'" + text + "': each side must be 1 to 16384 pixels");
-    return {w, h};
-}
-
-std::vector<Vec3d> parseDirections(const std::string& text) {
-    const std::string source = "option --directions";
-    if (text == "axes") return axisDirections();
-    if (!text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; })) {
-        if (text.size() > 6) throw InputError(source, "too many directions: " + text);
-        return spreadDirections(uint32_t(std::stoul(text)));
-    }
-    std::vector<Vec3d> dirs;
-    const char separator = text.find(';') != std::string::npos ? ';' : ',';
-    std::stringstream items(text);
-    std::string item;
-    while (std::getline(items, item, separator)) {
-        item.erase(0, item.find_first_not_of(' '));
-        item.erase(item.find_last_not_of(' ') + 1);
-        Vec3d d;
-        if (item == "x" || item == "+x") d = Vec3d(1, 0, 0);
-        else if (item == "-x") d = Vec3d(-1, 0, 0);
-        else if (item == "y" || item == "+y") d = Vec3d(0, 1, 0);
-        else if (item == "-y") d = Vec3d(0, -1, 0);
-        else if (item == "z" || item == "+z") d = Vec3d(0, 0, 1);
-        else if (item == "-z") d = Vec3d(0, 0, -1);
-        else {
-            std::stringstream nums(item);
-            std::string rest;
-            if (!(nums >> d.x() >> d.y() >> d.z()) || (nums >> rest))
-                throw InputError(source, "cannot read direction '" + item +
-                                             "' (expected axes, a count, or a list like x,-y,z or '1 0 0;0 1 1')");
-        }
-        if (!d.allFinite() || d.norm() == 0) throw InputError(source, "direction '" + item + "' is zero or not finite");
-        dirs.push_back(d.normalized());
-    }
-    if (dirs.empty()) throw InputError(source, "no directions given");
-    return dirs;
-}
-
 void CullideOptions::validate() const {
     if (directions.empty()) throw InputError("option --directions", "no directions given");
     for (const Vec3d& d : directions)
@@ -117,6 +65,37 @@ void CullideOptions::validate() const {
                                                     std::to_string(width) + "x" + std::to_string(height));
     if (hierarchy.leafSize < 1) throw InputError("option --leaf-size", "the leaf size must be at least 1");
     if (hierarchy.branching < 2) throw InputError("option --branching", "the branching must be at least 2");
+}
+
+void appendModifiedReducePcs(CommandList& list, std::span<const TriangleRange> ranges,
+                             std::span<uint32_t> forwardQuery, std::span<uint32_t> reverseQuery) {
+    CULLIDE_CHECK(forwardQuery.size() == ranges.size() && reverseQuery.size() == ranges.size(),
+                  "appendModifiedReducePcs: one query slot per range");
+    // Forward: write the object, then test it against everything so far, itself included, with
+    // GREATER (anything in front of one of its fragments fails it).
+    list.clear(1.0);
+    for (size_t i = 0; i < ranges.size(); ++i) {
+        list.depthMask(true);
+        list.depthFunc(DepthFunc::Less);
+        list.draw(ranges[i].first, ranges[i].count);
+        list.depthMask(false);
+        list.depthFunc(DepthFunc::Greater);
+        forwardQuery[i] = list.beginQuery(QueryKind::SamplesPassed);
+        list.draw(ranges[i].first, ranges[i].count);
+        list.endQuery();
+    }
+    // Reverse: test against the objects after it, then write it.
+    list.clear(1.0);
+    for (size_t i = ranges.size(); i-- > 0;) {
+        list.depthMask(false);
+        list.depthFunc(DepthFunc::Greater);
+        reverseQuery[i] = list.beginQuery(QueryKind::SamplesPassed);
+        list.draw(ranges[i].first, ranges[i].count);
+        list.endQuery();
+        list.depthMask(true);
+        list.depthFunc(DepthFunc::Less);
+        list.draw(ranges[i].first, ranges[i].count);
+    }
 }
 
 OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
@@ -357,23 +336,10 @@ private:
         std::vector<uint8_t> conflict(n, 0);
         for (const auto& [u, q] : queries) conflict[u] |= results[q] > 0 ? 1 : 0;
 
-        PassStats st;
-        st.level = level;
-        st.direction = d;
-        st.nodesIn = n;
-        for (const Item& it : pcs) st.trianglesIn += it.range.count;
         std::vector<Item> kept;
         for (uint32_t u = 0; u < n; ++u)
             if (conflict[u] || exactHit_[pcs[u].object][pcs[u].node]) kept.push_back(pcs[u]);
-        st.nodesOut = kept.size();
-        for (const Item& it : kept) st.trianglesOut += it.range.count;
-        for (const Command& c : list_.commands())
-            if (c.op == Command::Op::DrawConservative) st.trianglesRendered += c.count;
-        st.queries = list_.queryCount();
-        st.seconds = secondsSince(start);
-        passes.push_back(st);
-        if (opt_.onPass) opt_.onPass(st, expand(kept));
-        return kept;
+        return finishCall(pcs, std::move(kept), level, d, Command::Op::DrawConservative, start, passes);
     }
 
     // One reducePCS call in direction d: returns the nodes that stay.
@@ -384,40 +350,10 @@ private:
         backend_.setView(fitView(positions_, triangles_, ranges_, opt_.directions[d], opt_.width, opt_.height, opt_.depth));
 
         list_.reset();
-        PassStats st;
-        st.level = level;
-        st.direction = d;
-        st.nodesIn = pcs.size();
-        for (const Item& it : pcs) st.trianglesIn += it.range.count;
-
         // forwardQuery[i] / reverseQuery[i]: the query numbers of PCS item i in each pass.
         std::vector<uint32_t> forwardQuery(pcs.size()), reverseQuery(pcs.size());
         if (opt_.method == CullMethod::Modified) {
-            // Figure 3, forward: write the object, then test it against everything so far,
-            // itself included, with GREATER (anything in front of one of its fragments fails it).
-            list_.clear(1.0);
-            for (size_t i = 0; i < pcs.size(); ++i) {
-                list_.depthMask(true);
-                list_.depthFunc(DepthFunc::Less);
-                list_.draw(pcs[i].range.first, pcs[i].range.count);
-                list_.depthMask(false);
-                list_.depthFunc(DepthFunc::Greater);
-                forwardQuery[i] = list_.beginQuery(QueryKind::SamplesPassed);
-                list_.draw(pcs[i].range.first, pcs[i].range.count);
-                list_.endQuery();
-            }
-            // Reverse: test against the objects after it, then write it.
-            list_.clear(1.0);
-            for (size_t i = pcs.size(); i-- > 0;) {
-                list_.depthMask(false);
-                list_.depthFunc(DepthFunc::Greater);
-                reverseQuery[i] = list_.beginQuery(QueryKind::SamplesPassed);
-                list_.draw(pcs[i].range.first, pcs[i].range.count);
-                list_.endQuery();
-                list_.depthMask(true);
-                list_.depthFunc(DepthFunc::Less);
-                list_.draw(pcs[i].range.first, pcs[i].range.count);
-            }
+            appendModifiedReducePcs(list_, ranges_, forwardQuery, reverseQuery);  // Figure 3
         } else {
             // Figure 2, per object: query every node of the object with GEQUAL against the other
             // objects drawn so far, then write them all. Siblings never test each other.
@@ -452,10 +388,22 @@ private:
             const bool fullyVisible = results[forwardQuery[i]] == 0 && results[reverseQuery[i]] == 0;
             if (!fullyVisible) kept.push_back(pcs[i]);
         }
+        return finishCall(pcs, std::move(kept), level, d, Command::Op::Draw, start, passes);
+    }
+
+    // The statistics of one reducePCS call from `pcs` to `kept` (triangles rendered: those of the
+    // list's `drawOp` commands), appended to `passes` and reported to onPass. Returns `kept`.
+    std::vector<Item> finishCall(const std::vector<Item>& pcs, std::vector<Item> kept, uint32_t level, uint32_t d,
+                                 Command::Op drawOp, Clock::time_point start, std::vector<PassStats>& passes) {
+        PassStats st;
+        st.level = level;
+        st.direction = d;
+        st.nodesIn = pcs.size();
+        for (const Item& it : pcs) st.trianglesIn += it.range.count;
         st.nodesOut = kept.size();
         for (const Item& it : kept) st.trianglesOut += it.range.count;
         for (const Command& c : list_.commands())
-            if (c.op == Command::Op::Draw) st.trianglesRendered += c.count;
+            if (c.op == drawOp) st.trianglesRendered += c.count;
         st.queries = list_.queryCount();
         st.seconds = secondsSince(start);
         passes.push_back(st);

@@ -162,14 +162,24 @@ void CommandList::endQuery() {
     inQuery_ = false;
 }
 
-void CommandList::draw(uint32_t first, uint32_t count) {
+namespace {
+
+// A draw command (`op`) of the triangles [first, first + count); InputError when the range
+// overflows 32-bit triangle indices.
+Command drawCommand(Command::Op op, uint32_t first, uint32_t count) {
     if (uint64_t(first) + count > std::numeric_limits<uint32_t>::max())
         throw InputError("command list", "draw range [" + std::to_string(first) + ", +" + std::to_string(count) +
                                              ") overflows 32-bit triangle indices");
-    Command c{Command::Op::Draw};
+    Command c{op};
     c.first = first;
     c.count = count;
-    commands_.push_back(c);
+    return c;
+}
+
+}  // namespace
+
+void CommandList::draw(uint32_t first, uint32_t count) {
+    commands_.push_back(drawCommand(Command::Op::Draw, first, count));
     ++draws_;
 }
 
@@ -180,12 +190,7 @@ void CommandList::clearIntervals() {
 
 void CommandList::drawConservative(uint32_t first, uint32_t count, bool test, bool write) {
     if (!test && !write) throw InputError("command list", "a conservative draw must test, write or both");
-    if (uint64_t(first) + count > std::numeric_limits<uint32_t>::max())
-        throw InputError("command list", "draw range [" + std::to_string(first) + ", +" + std::to_string(count) +
-                                             ") overflows 32-bit triangle indices");
-    Command c{Command::Op::DrawConservative};
-    c.first = first;
-    c.count = count;
+    Command c = drawCommand(Command::Op::DrawConservative, first, count);
     c.test = test;
     c.write = write;
     commands_.push_back(c);

@@ -1,4 +1,4 @@
-// Output files, all or nothing (see file_io.h).
+// Input files read whole, output files written all or nothing (see file_io.h).
 #include "cullide/file_io.h"
 
 #include "cullide/error.h"
@@ -14,6 +14,24 @@
 namespace cullide {
 
 namespace fs = std::filesystem;
+
+std::string readFile(const fs::path& path) {
+    const std::string src = path.string();
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (ec || !fs::exists(st)) throw InputError(src, "cannot open: no such file");
+    if (fs::is_directory(st)) throw InputError(src, "cannot read: it is a directory, not a file");
+    std::FILE* f = std::fopen(src.c_str(), "rb");
+    if (!f) throw InputError(src, std::string("cannot open: ") + std::strerror(errno));
+    std::string data;
+    char buf[1 << 16];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) data.append(buf, n);
+    const bool failed = std::ferror(f) != 0;
+    std::fclose(f);
+    if (failed) throw InputError(src, "cannot read: I/O error");
+    return data;
+}
 
 void writeFileAtomically(const fs::path& path, std::string_view bytes) {
     static std::atomic<unsigned> counter{0};

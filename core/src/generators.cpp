@@ -72,6 +72,26 @@ Vec3f addDelta(const Vec3f& p, const Vec3d& d) {
 // Animation parameter of frame f of n (0 at the first frame, 1 at the last; 1 for a single frame).
 double ramp(size_t f, size_t n) { return n > 1 ? double(f) / double(n - 1) : 1.0; }
 
+// One deforming object: `triangles` with positions shape(1) in the base scene and
+// shape(ramp(f, frames)) in frame f.
+template <typename Shape>
+Animation deformingObject(const std::string& name, const std::vector<Triangle>& triangles, size_t frames,
+                          Shape&& shape) {
+    Animation a;
+    Object o;
+    o.name = name;
+    o.mesh.triangles = triangles;
+    o.mesh.positions = shape(1.0);
+    a.scene.objects.push_back(std::move(o));
+    for (size_t f = 0; f < frames; ++f) {
+        Frame fr;
+        fr.poses.resize(1);
+        fr.poses[0].positions = shape(ramp(f, frames));
+        a.frames.push_back(std::move(fr));
+    }
+    return a;
+}
+
 // Keeps referenced vertices only, in their original order; remaps the triangles.
 Mesh compact(const std::vector<Vec3f>& positions, const std::vector<unsigned int>& indices) {
     std::vector<uint32_t> remap(positions.size(), UINT32_MAX);
@@ -248,19 +268,7 @@ Animation makeDeformedBunny(const Mesh& bunny, const SceneRequest& request) {
         for (const Vec3f& p : rest.positions) ps.push_back(bendEar(bend, p, amount));
         return ps;
     };
-    Animation a;
-    Object o;
-    o.name = "bunny";
-    o.mesh.triangles = rest.triangles;
-    o.mesh.positions = deformed(1.0);
-    a.scene.objects.push_back(std::move(o));
-    for (size_t f = 0; f < request.frames; ++f) {
-        Frame fr;
-        fr.poses.resize(1);
-        fr.poses[0].positions = deformed(ramp(f, request.frames));
-        a.frames.push_back(std::move(fr));
-    }
-    return a;
+    return deformingObject("bunny", rest.triangles, request.frames, deformed);
 }
 
 // ---- Two cows ----------------------------------------------------------------------------
@@ -434,19 +442,7 @@ Animation makeTwistAnimation(const Mesh& base, const SceneRequest& request) {
         }
         return ps;
     };
-    Animation a;
-    Object o;
-    o.name = "twist";
-    o.mesh.triangles = base.triangles;
-    o.mesh.positions = twisted(1.0);
-    a.scene.objects.push_back(std::move(o));
-    for (size_t f = 0; f < request.frames; ++f) {
-        Frame fr;
-        fr.poses.resize(1);
-        fr.poses[0].positions = twisted(ramp(f, request.frames));
-        a.frames.push_back(std::move(fr));
-    }
-    return a;
+    return deformingObject("twist", base.triangles, request.frames, twisted);
 }
 
 }  // namespace cullide

@@ -44,27 +44,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// ---------------------------------------------------------------------------------------------
-// Reading the file
-
-std::string readWholeFile(const fs::path& path) {
-    const std::string src = path.string();
-    std::error_code ec;
-    const fs::file_status st = fs::status(path, ec);
-    if (ec || !fs::exists(st)) throw InputError(src, "cannot open: no such file");
-    if (fs::is_directory(st)) throw InputError(src, "cannot read: it is a directory, not a file");
-    std::FILE* f = std::fopen(src.c_str(), "rb");
-    if (!f) throw InputError(src, std::string("cannot open: ") + std::strerror(errno));
-    std::string data;
-    char buf[1 << 16];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) data.append(buf, n);
-    const bool failed = std::ferror(f) != 0;
-    std::fclose(f);
-    if (failed) throw InputError(src, "cannot read: I/O error");
-    return data;
-}
-
 bool onlyWhitespace(std::string_view s) {
     return std::all_of(s.begin(), s.end(), [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v'; });
 }
@@ -859,7 +838,7 @@ MeshFormat meshFormatFromPath(const fs::path& path) {
 Mesh loadMesh(const fs::path& path) {
     const std::string src = path.string();
     const MeshFormat format = meshFormatFromPath(path);
-    const std::string data = readWholeFile(path);
+    const std::string data = readFile(path);
     Mesh mesh;
     switch (format) {
     case MeshFormat::Obj: mesh = readObj(src, data); break;

@@ -3,6 +3,7 @@
 #include "cullide/error.h"
 
 #include <cmath>
+#include <limits>
 
 namespace cullide {
 
@@ -33,6 +34,24 @@ Mesh Scene::worldMesh(size_t i) const {
     m.positions.reserve(o.mesh.positions.size());
     for (const Vec3f& p : o.mesh.positions) m.positions.push_back(applyTransform(o.transform, p));
     return m;
+}
+
+FlatScene flatten(const Scene& scene) {
+    const uint64_t vertices = scene.vertexCount(), triangles = scene.triangleCount();
+    if (vertices > std::numeric_limits<uint32_t>::max() || triangles > std::numeric_limits<uint32_t>::max())
+        throw InputError("scene", "more than 2^32 vertices or triangles");
+    FlatScene f;
+    f.mesh.positions.reserve(vertices);
+    f.mesh.triangles.reserve(triangles);
+    f.firstTriangle.reserve(scene.objects.size() + 1);
+    for (const Object& o : scene.objects) {
+        const uint32_t base = uint32_t(f.mesh.positions.size());
+        f.firstTriangle.push_back(uint32_t(f.mesh.triangles.size()));
+        for (const Vec3f& p : o.mesh.positions) f.mesh.positions.push_back(applyTransform(o.transform, p));
+        for (const Triangle& t : o.mesh.triangles) f.mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    f.firstTriangle.push_back(uint32_t(f.mesh.triangles.size()));
+    return f;
 }
 
 Scene Animation::sceneAt(size_t f) const {

@@ -14,10 +14,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <map>
 #include <numbers>
 #include <set>
@@ -34,7 +32,7 @@ public:
     SceneParser(fs::path path) : path_(std::move(path)), src_(path_.string()), dir_(path_.parent_path()) {}
 
     Animation parse() {
-        const Json root = parseJson(readText());
+        const Json root = parseJson(readFile(path_));
         Animation a;
         requireObject(root, "the top level");
         allowKeys(root, "the top level", {"objects", "animation"});
@@ -70,23 +68,6 @@ public:
 
 private:
     [[noreturn]] void fail(const std::string& cause) const { throw InputError(src_, cause); }
-
-    std::string readText() const {
-        std::error_code ec;
-        const fs::file_status st = fs::status(path_, ec);
-        if (ec || !fs::exists(st)) fail("cannot open: no such file");
-        if (fs::is_directory(st)) fail("cannot read: it is a directory, not a file");
-        std::FILE* f = std::fopen(src_.c_str(), "rb");
-        if (!f) fail(std::string("cannot open: ") + std::strerror(errno));
-        std::string data;
-        char buf[1 << 16];
-        size_t n;
-        while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) data.append(buf, n);
-        const bool failed = std::ferror(f) != 0;
-        std::fclose(f);
-        if (failed) fail("cannot read: I/O error");
-        return data;
-    }
 
     Json parseJson(const std::string& text) const {
         std::vector<std::set<std::string>> keys;  // one per open JSON object

@@ -85,9 +85,9 @@ bool holdsPixelCentre(const std::vector<P2>& poly, int width, int height) {
 
 using Corners = std::array<Vec3d, 3>;
 
-Corners corners(const std::vector<Mesh>& world, const TriangleRef& t) {
-    const Mesh& m = world[t.object];
-    const Triangle& tri = m.triangles[t.triangle];
+Corners corners(const FlatScene& world, const TriangleRef& t) {
+    const Mesh& m = world.mesh;
+    const Triangle& tri = m.triangles[world.triangle(t.object, t.triangle)];
     return {m.positions[tri[0]].cast<double>(), m.positions[tri[1]].cast<double>(), m.positions[tri[2]].cast<double>()};
 }
 
@@ -175,19 +175,12 @@ PcsReport measurePcs(const Scene& scene, const Truth& truth, std::span<const Pcs
     if (missed.empty()) return r;
 
     // The whole scene as one geometry, and one view per direction fitted to all of it.
-    std::vector<Mesh> world(objects);
-    std::vector<Vec3f> positions;
-    std::vector<Triangle> triangles;
-    for (size_t o = 0; o < objects; ++o) {
-        world[o] = scene.worldMesh(o);
-        const uint32_t base = uint32_t(positions.size());
-        positions.insert(positions.end(), world[o].positions.begin(), world[o].positions.end());
-        for (const Triangle& t : world[o].triangles) triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-    }
-    const TriangleRange all{0, uint32_t(triangles.size())};
+    const FlatScene world = flatten(scene);
+    const TriangleRange all{0, uint32_t(world.mesh.triangles.size())};
     std::vector<OrthoView> views;
     for (const Vec3d& d : options.directions)
-        views.push_back(fitView(positions, triangles, std::span(&all, 1), d, options.width, options.height, options.depth));
+        views.push_back(fitView(world.mesh.positions, world.mesh.triangles, std::span(&all, 1), d, options.width,
+                                options.height, options.depth));
 
     for (const IntersectingPair* p : missed) {
         MissedPair mp;

@@ -131,53 +131,57 @@ def main():
     # --- bad: meshes ---------------------------------------------------------------------------
     os.makedirs(os.path.join(BAD, "a_directory.off"), exist_ok=True)
     write(os.path.join(BAD, "a_directory.off", ".keep"), "")
-    write(os.path.join(BAD, "unknown_extension.xyz"), off_text(V, F))
-    write(os.path.join(BAD, "parse_error.obj"), "v 0 0 0\nv 1 abc 0\nv 0 1 0\nf 1 2 3\n")
-    write(os.path.join(BAD, "parse_error.off"), "OFF\n3 1 0\n0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n")
-    write(os.path.join(BAD, "parse_error.ply"),
-          "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-          "element face 1\nproperty list uchar int vertex_indices\nbogus line\nend_header\n")
-    write(os.path.join(BAD, "parse_error.stl"),
-          "solid t\nfacet normal 0 0 1\n outer loop\n vertex 0 0 0\n vertex 1 x 0\n vertex 1 1 0\n"
-          " endloop\nendfacet\nendsolid t\n")
-    write(os.path.join(BAD, "truncated_binary.ply"), ply_binary(V, F, "<", truncate=-7))
-    write(os.path.join(BAD, "nan.off"), "OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n")
-    write(os.path.join(BAD, "inf.off"), "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n")
-    write(os.path.join(BAD, "nan_binary.ply"), ply_binary([(0, 0, 0), (float("nan"), 0, 0), (0, 1, 0)], [(0, 1, 2)]))
-    write(os.path.join(BAD, "overflow.obj"), "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n")
-    write(os.path.join(BAD, "index_out_of_range.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n")
-    write(os.path.join(BAD, "index_out_of_range.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n")
-    write(os.path.join(BAD, "negative_index.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n")
-    write(os.path.join(BAD, "negative_index.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n")
-    write(os.path.join(BAD, "empty.off"), "")
-    write(os.path.join(BAD, "empty.obj"), "\n\n")
-    write(os.path.join(BAD, "empty.stl"), "")
-    write(os.path.join(BAD, "zero_triangles.off"), "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n")
-    write(os.path.join(BAD, "zero_triangles.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n")
-    write(os.path.join(BAD, "two_vertex_face.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n")
-    write(os.path.join(BAD, "two_vertex_face.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n")
-    write(os.path.join(BAD, "four_vertex_facet.stl"),
-          "solid t\nfacet normal 0 0 1\n outer loop\n vertex 0 0 0\n vertex 1 0 0\n vertex 1 1 0\n"
-          " vertex 2 2 2\n endloop\nendfacet\nendsolid t\n")
-    write(os.path.join(BAD, "fewer_faces_than_header.off"), "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
-
-    # --- bad: scenes ---------------------------------------------------------------------------
-    write(os.path.join(BAD, "malformed.json"), '{\n  "objects": [\n    {"name": "a", "mesh": "../good/polys.off",}\n  ]\n}\n')
-    write(os.path.join(BAD, "missing_key.json"), '{"objects": [{"name": "a"}]}\n')
-    write(os.path.join(BAD, "wrong_type.json"), '{"objects": [{"name": "a", "mesh": "../good/polys.off", "transform": {"scale": "big"}}]}\n')
-    write(os.path.join(BAD, "unknown_key.json"), '{"objects": [{"name": "a", "mesh": "../good/polys.off", "colour": 3}]}\n')
-    write(os.path.join(BAD, "duplicate_name.json"),
-          '{"objects": [{"name": "a", "mesh": "../good/polys.off"}, {"name": "a", "mesh": "../good/polys.off"}]}\n')
-    write(os.path.join(BAD, "duplicate_key.json"), '{"objects": [{"name": "a", "name": "b", "mesh": "../good/polys.off"}]}\n')
-    write(os.path.join(BAD, "unknown_object_in_frame.json"),
-          '{"objects": [{"name": "a", "mesh": "../good/polys.off"}],\n'
-          ' "animation": {"frames": [{"objects": {"b": {"transform": {"translate": [0, 0, 1]}}}}]}}\n')
-    write(os.path.join(BAD, "wrong_position_count.json"),
-          '{"objects": [{"name": "a", "mesh": "../good/polys.off"}],\n'
-          ' "animation": {"frames": [{"objects": {"a": {"positions": "../good/cube_binary.stl"}}}]}}\n')
-    write(os.path.join(BAD, "missing_mesh.json"), '{"objects": [{"name": "a", "mesh": "no_such_mesh.off"}]}\n')
-    write(os.path.join(BAD, "nonfinite_transform.json"),
-          '{"objects": [{"name": "a", "mesh": "../good/polys.off", "transform": {"translate": [0, 1e39, 0]}}]}\n')
+    bad = [  # (name, contents)
+        ("unknown_extension.xyz", off_text(V, F)),
+        ("parse_error.obj", "v 0 0 0\nv 1 abc 0\nv 0 1 0\nf 1 2 3\n"),
+        ("parse_error.off", "OFF\n3 1 0\n0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n"),
+        ("parse_error.ply",
+         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+         "element face 1\nproperty list uchar int vertex_indices\nbogus line\nend_header\n"),
+        ("parse_error.stl",
+         "solid t\nfacet normal 0 0 1\n outer loop\n vertex 0 0 0\n vertex 1 x 0\n vertex 1 1 0\n"
+         " endloop\nendfacet\nendsolid t\n"),
+        ("truncated_binary.ply", ply_binary(V, F, "<", truncate=-7)),
+        ("nan.off", "OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n"),
+        ("inf.off", "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n"),
+        ("nan_binary.ply", ply_binary([(0, 0, 0), (float("nan"), 0, 0), (0, 1, 0)], [(0, 1, 2)])),
+        ("overflow.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n"),
+        ("index_out_of_range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n"),
+        ("index_out_of_range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"),
+        ("negative_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n"),
+        ("negative_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n"),
+        ("empty.off", ""),
+        ("empty.obj", "\n\n"),
+        ("empty.stl", ""),
+        ("zero_triangles.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"),
+        ("zero_triangles.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"),
+        ("two_vertex_face.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n"),
+        ("two_vertex_face.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n"),
+        ("four_vertex_facet.stl",
+         "solid t\nfacet normal 0 0 1\n outer loop\n vertex 0 0 0\n vertex 1 0 0\n vertex 1 1 0\n"
+         " vertex 2 2 2\n endloop\nendfacet\nendsolid t\n"),
+        ("fewer_faces_than_header.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+        # --- bad: scenes -----------------------------------------------------------------------
+        ("malformed.json", '{\n  "objects": [\n    {"name": "a", "mesh": "../good/polys.off",}\n  ]\n}\n'),
+        ("missing_key.json", '{"objects": [{"name": "a"}]}\n'),
+        ("wrong_type.json",
+         '{"objects": [{"name": "a", "mesh": "../good/polys.off", "transform": {"scale": "big"}}]}\n'),
+        ("unknown_key.json", '{"objects": [{"name": "a", "mesh": "../good/polys.off", "colour": 3}]}\n'),
+        ("duplicate_name.json",
+         '{"objects": [{"name": "a", "mesh": "../good/polys.off"}, {"name": "a", "mesh": "../good/polys.off"}]}\n'),
+        ("duplicate_key.json", '{"objects": [{"name": "a", "name": "b", "mesh": "../good/polys.off"}]}\n'),
+        ("unknown_object_in_frame.json",
+         '{"objects": [{"name": "a", "mesh": "../good/polys.off"}],\n'
+         ' "animation": {"frames": [{"objects": {"b": {"transform": {"translate": [0, 0, 1]}}}}]}}\n'),
+        ("wrong_position_count.json",
+         '{"objects": [{"name": "a", "mesh": "../good/polys.off"}],\n'
+         ' "animation": {"frames": [{"objects": {"a": {"positions": "../good/cube_binary.stl"}}}]}}\n'),
+        ("missing_mesh.json", '{"objects": [{"name": "a", "mesh": "no_such_mesh.off"}]}\n'),
+        ("nonfinite_transform.json",
+         '{"objects": [{"name": "a", "mesh": "../good/polys.off", "transform": {"translate": [0, 1e39, 0]}}]}\n'),
+    ]
+    for name, data in bad:
+        write(os.path.join(BAD, name), data)
 
 
 if __name__ == "__main__":

@@ -5,14 +5,31 @@
 // for a run that worked but found a failure it was asked to check for.
 #pragma once
 
+#include "cullide/error.h"
+#include "cullide/scene.h"
+
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <string>
 
 namespace cullide::cli {
 
 // A subcommand's action, run after parsing; returns the process exit status.
 using Action = std::function<int()>;
+
+// The frames [first, last) a --frame value selects (frame < 0: every frame). Throws
+// InputError("option --frame") when `animation`, read from `path`, has no such frame.
+struct FrameRange {
+    size_t first = 0, last = 0;
+};
+inline FrameRange selectFrames(const Animation& animation, long frame, const std::string& path) {
+    if (frame < 0) return {0, animation.frameCount()};
+    if (size_t(frame) >= animation.frameCount())
+        throw InputError("option --frame", "frame " + std::to_string(frame) + " requested, but " + path + " has " +
+                                               std::to_string(animation.frameCount()) + " frame(s)");
+    return {size_t(frame), size_t(frame) + 1};
+}
 
 void addInfoCommand(CLI::App& app, Action& action);
 void addMakeSceneCommand(CLI::App& app, Action& action);

@@ -52,10 +52,7 @@ int runInfo(const InfoOptions& o) {
     nlohmann::ordered_json all = nlohmann::ordered_json::array();
     for (const std::string& path : o.paths) {
         const Animation animation = loadScene(path);
-        if (size_t(o.frame) >= animation.frameCount())
-            throw InputError("option --frame", "frame " + std::to_string(o.frame) + " requested, but " + path +
-                                                   " has " + std::to_string(animation.frameCount()) + " frame(s)");
-        const Scene scene = animation.sceneAt(size_t(o.frame));
+        const Scene scene = animation.sceneAt(selectFrames(animation, o.frame, path).first);
 
         nlohmann::ordered_json objects = nlohmann::ordered_json::array();
         MeshStats total;

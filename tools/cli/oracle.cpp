@@ -37,11 +37,7 @@ int runOracle(const OracleCommandOptions& o) {
     std::optional<tbb::global_control> limit;
     if (o.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
     const Animation animation = loadScene(o.scene);
-    if (o.frame >= 0 && size_t(o.frame) >= animation.frameCount())
-        throw InputError("option --frame", "frame " + std::to_string(o.frame) + " requested, but " + o.scene + " has " +
-                                               std::to_string(animation.frameCount()) + " frame(s)");
-    const size_t first = o.frame >= 0 ? size_t(o.frame) : 0;
-    const size_t last = o.frame >= 0 ? size_t(o.frame) + 1 : animation.frameCount();
+    const auto [first, last] = selectFrames(animation, o.frame, o.scene);
     oracle::OracleOptions options;
     options.weldByPosition = o.weld;
     options.broadPhase = oracle::parseBroadPhase(o.broadPhase);

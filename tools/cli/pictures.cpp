@@ -10,9 +10,7 @@ namespace cullide::cli {
 
 struct PcsPictures::State {
     std::unique_ptr<raster::CpuBackend> backend;
-    std::vector<Vec3f> positions;
-    std::vector<Triangle> triangles;
-    std::vector<uint32_t> firstTriangle;  // per object, in `triangles`
+    FlatScene flat;  // the scene as one geometry
     DepthImage scene;                     // the whole scene's depth
     int width = 0, height = 0;
 };
@@ -23,16 +21,11 @@ PcsPictures::PcsPictures(const Scene& scene, const Vec3d& direction, int width, 
     s.width = width;
     s.height = height;
     s.backend = raster::makeCpuBackend();
-    for (size_t i = 0; i < scene.objects.size(); ++i) {
-        const Mesh m = scene.worldMesh(i);
-        const uint32_t base = uint32_t(s.positions.size());
-        s.firstTriangle.push_back(uint32_t(s.triangles.size()));
-        s.positions.insert(s.positions.end(), m.positions.begin(), m.positions.end());
-        for (const Triangle& t : m.triangles) s.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-    }
-    s.backend->setGeometry(s.positions, s.triangles);
-    const TriangleRange all{0, uint32_t(s.triangles.size())};
-    s.backend->setView(fitView(s.positions, s.triangles, {&all, 1}, direction.normalized(), width, height,
+    s.flat = flatten(scene);
+    const Mesh& m = s.flat.mesh;
+    s.backend->setGeometry(m.positions, m.triangles);
+    const TriangleRange all{0, uint32_t(m.triangles.size())};
+    s.backend->setView(fitView(m.positions, m.triangles, {&all, 1}, direction.normalized(), width, height,
                                DepthFormat::unorm(24)));
     CommandList list;
     list.clear(1.0);
@@ -49,9 +42,9 @@ void PcsPictures::write(std::span<const PcsTriangle> pcs, const std::filesystem:
     list.clear(1.0);
     // Consecutive triangles of the PCS become one draw.
     for (size_t i = 0; i < pcs.size();) {
-        const uint32_t first = s.firstTriangle[pcs[i].object] + pcs[i].triangle;
+        const uint32_t first = s.flat.triangle(pcs[i].object, pcs[i].triangle);
         size_t j = i + 1;
-        while (j < pcs.size() && s.firstTriangle[pcs[j].object] + pcs[j].triangle == first + (j - i)) ++j;
+        while (j < pcs.size() && s.flat.triangle(pcs[j].object, pcs[j].triangle) == first + (j - i)) ++j;
         list.draw(first, uint32_t(j - i));
         i = j;
     }

@@ -9,6 +9,7 @@
 #include "cullide/error.h"
 #include "cullide/file_io.h"
 #include "cullide/mesh_io.h"
+#include "cullide/options.h"
 #include "cullide/scene_io.h"
 
 #include <nlohmann/json.hpp>
@@ -23,14 +24,7 @@ namespace {
 
 struct PruneOptions {
     std::string scene;
-    std::string method = "modified";
-    std::string resolution = "500";
-    std::string depth = "24";
-    std::string directions = "axes";
-    std::string hierarchy = "connectivity";
-    uint32_t leafSize = 16;
-    uint32_t branching = 4;
-    uint64_t seed = 1;
+    OptionText cullide;  // method, resolution, depth, directions, hierarchy (cullide/options.h)
     std::string backend = "cpu";
     int threads = 0;
     long frame = -1;  // -1: every frame
@@ -39,64 +33,25 @@ struct PruneOptions {
     bool check = false, exact = false;  // against the exact oracle (oracle_check.h)
 };
 
-CullideOptions cullideOptions(const PruneOptions& o) {
-    CullideOptions c;
-    c.method = parseCullMethod(o.method);
-    std::tie(c.width, c.height) = parseResolution(o.resolution);
-    try {
-        c.depth = DepthFormat::parse(o.depth);
-    } catch (const InputError& e) {
-        throw InputError("option --depth", e.what());
-    }
-    c.directions = parseDirections(o.directions);
-    c.hierarchy.kind = parseHierarchyKind(o.hierarchy);
-    c.hierarchy.leafSize = o.leafSize;
-    c.hierarchy.branching = o.branching;
-    c.hierarchy.seed = o.seed;
-    c.validate();
-    return c;
-}
-
-nlohmann::ordered_json passJson(const PassStats& p) {
-    return {{"level", p.level},           {"direction", p.direction},
-            {"nodes_in", p.nodesIn},      {"nodes_out", p.nodesOut},
-            {"triangles_in", p.trianglesIn}, {"triangles_out", p.trianglesOut},
-            {"triangles_rendered", p.trianglesRendered}, {"queries", p.queries},
-            {"seconds", p.seconds}};
-}
-
 // The scene at one frame as one mesh, PCS triangles green and the rest grey (Figures 6 and 7).
 void writePcsPly(const Scene& scene, const std::vector<PcsTriangle>& pcs, const std::string& path) {
-    Mesh all;
-    std::vector<Rgb8> colours;
-    std::vector<size_t> firstTriangle;
-    for (size_t i = 0; i < scene.objects.size(); ++i) {
-        const Mesh m = scene.worldMesh(i);
-        const uint32_t base = uint32_t(all.positions.size());
-        firstTriangle.push_back(all.triangles.size());
-        all.positions.insert(all.positions.end(), m.positions.begin(), m.positions.end());
-        for (const Triangle& t : m.triangles) all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-    }
-    colours.assign(all.triangles.size(), Rgb8{170, 170, 170});
-    for (const PcsTriangle& p : pcs) colours[firstTriangle[p.object] + p.triangle] = Rgb8{40, 200, 40};
+    const FlatScene all = flatten(scene);
+    std::vector<Rgb8> colours(all.mesh.triangles.size(), Rgb8{170, 170, 170});
+    for (const PcsTriangle& p : pcs) colours[all.triangle(p.object, p.triangle)] = Rgb8{40, 200, 40};
     PlyWriteOptions w;
     w.faceColours = colours;
-    writePly(all, path, w);
+    writePly(all.mesh, path, w);
 }
 
 int runPrune(const PruneOptions& o) {
-    const CullideOptions options = cullideOptions(o);
+    const CullideOptions options = parseCullideOptions(o.cullide);
     const std::unique_ptr<DepthBackend> backend = study::makeBackend(o.backend, o.threads);
 
     const Animation animation = loadScene(o.scene);
-    if (o.frame >= 0 && size_t(o.frame) >= animation.frameCount())
-        throw InputError("option --frame", "frame " + std::to_string(o.frame) + " requested, but " + o.scene + " has " +
-                                               std::to_string(animation.frameCount()) + " frame(s)");
+    const auto [first, last] = selectFrames(animation, o.frame, o.scene);
     if (!o.out.empty() && o.frame < 0 && animation.frameCount() > 1)
         throw InputError("option --out", "the scene has " + std::to_string(animation.frameCount()) +
                                              " frames; choose one with --frame to write its PLY");
-    const size_t first = o.frame >= 0 ? size_t(o.frame) : 0;
-    const size_t last = o.frame >= 0 ? size_t(o.frame) + 1 : animation.frameCount();
 
     std::printf("%s: %s, %dx%d, %s, %zu direction(s), %s hierarchy (leaf %u, branching %u), %s\n", o.scene.c_str(),
                 toString(options.method), options.width, options.height, options.depth.name().c_str(),
@@ -140,7 +95,7 @@ int runPrune(const PruneOptions& o) {
             nlohmann::ordered_json pcs = nlohmann::ordered_json::array();
             for (const PcsTriangle& p : r.pcs) pcs.push_back({p.object, p.triangle});
             nlohmann::ordered_json passes = nlohmann::ordered_json::array();
-            for (const PassStats& p : r.passes) passes.push_back(passJson(p));
+            for (const PassStats& p : r.passes) passes.push_back(study::passJson(p));
             frames.push_back({{"frame", f}, {"triangles", total}, {"pcs", pcs}, {"passes", passes},
                               {"levels", r.levels}, {"hierarchy_seconds", r.hierarchySeconds},
                               {"total_seconds", r.totalSeconds}});
@@ -176,22 +131,23 @@ void addPruneCommand(CLI::App& app, Action& action) {
     auto o = std::make_shared<PruneOptions>();
     CLI::App* sub = app.add_subcommand("prune", "Compute the potentially colliding set (PCS) of every frame of a scene");
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
-    sub->add_option("--method", o->method, "original (Cullide, contacts kept) | modified (self-intersections kept) | reliable (no intersecting "
-                    "triangle is ever pruned; CPU backend only; docs/reliable.md)")
+    sub->add_option("--method", o->cullide.method,
+                    "original (Cullide, contacts kept) | modified (self-intersections kept) | reliable (no "
+                    "intersecting triangle is ever pruned; CPU backend only; docs/reliable.md)")
         ->capture_default_str();
-    sub->add_option("--resolution", o->resolution, "Viewport: N or WxH pixels (1 to 16384 per side)")->capture_default_str();
-    sub->add_option("--depth", o->depth, "Depth format: unorm bits 8..32 (e.g. 24, d16) or float")->capture_default_str();
-    sub->add_option("--directions", o->directions,
+    sub->add_option("--resolution", o->cullide.resolution, "Viewport: N or WxH pixels (1 to 16384 per side)")
+        ->capture_default_str();
+    sub->add_option("--depth", o->cullide.depth, "Depth format: unorm bits 8..32 (e.g. 24, d16) or float")
+        ->capture_default_str();
+    sub->add_option("--directions", o->cullide.directions,
                     "View directions: 'axes' (+x -x +y -y +z -z), a count N (spread), or a list 'x,-y,z' / '1 0 0;0 1 1'")
         ->capture_default_str();
-    sub->add_option("--hierarchy", o->hierarchy, "connectivity | random")->capture_default_str();
-    sub->add_option("--leaf-size", o->leafSize, "Triangles per hierarchy leaf (1 to 1,000,000)")
-        ->check(CLI::Range(1u, 1'000'000u))
+    sub->add_option("--hierarchy", o->cullide.hierarchy, "connectivity | random")->capture_default_str();
+    sub->add_option("--leaf-size", o->cullide.leafSize, "Triangles per hierarchy leaf (1 to 1,000,000)")
         ->capture_default_str();
-    sub->add_option("--branching", o->branching, "Children per hierarchy node (2 to 64)")
-        ->check(CLI::Range(2u, 64u))
+    sub->add_option("--branching", o->cullide.branching, "Children per hierarchy node (2 to 64)")
         ->capture_default_str();
-    sub->add_option("--seed", o->seed, "Seed of the random hierarchy");
+    sub->add_option("--seed", o->cullide.seed, "Seed of the random hierarchy");
     sub->add_option("--backend", o->backend, "cpu (the reference rasterizer) | gl (OpenGL 4.5 through headless EGL)")
         ->check(CLI::IsMember({"cpu", "gl"}))
         ->capture_default_str();

@@ -45,12 +45,13 @@ study::Spec buildSpec(const StudyCliOptions& o) {
     }
     if (!o.spec.empty()) s = study::loadSpec(o.spec);
     if (!o.scenes.empty()) s.scenes = o.scenes;
-    if (!o.methods.empty()) s.methods = o.methods;
-    if (!o.resolutions.empty()) s.resolutions = o.resolutions;
-    if (!o.depths.empty()) s.depths = o.depths;
-    if (!o.directions.empty()) s.directions = o.directions;
-    if (!o.hierarchies.empty()) s.hierarchies = o.hierarchies;
-    if (!o.leafSizes.empty()) s.leafSizes = o.leafSizes;
+    // A value from the command line is named by its option in errors, one from the spec by its key.
+    if (!o.methods.empty()) s.methods = o.methods, s.names.method = "option --methods";
+    if (!o.resolutions.empty()) s.resolutions = o.resolutions, s.names.resolution = "option --resolutions";
+    if (!o.depths.empty()) s.depths = o.depths, s.names.depth = "option --depths";
+    if (!o.directions.empty()) s.directions = o.directions, s.names.directions = "option --directions";
+    if (!o.hierarchies.empty()) s.hierarchies = o.hierarchies, s.names.hierarchy = "option --hierarchies";
+    if (!o.leafSizes.empty()) s.leafSizes = o.leafSizes, s.names.leafSize = "option --leaf-sizes";
     if (!o.backends.empty()) s.backends = o.backends;
     if (!o.threads.empty()) s.threads = o.threads;
     if (o.repeats > 0) s.repeats = o.repeats;

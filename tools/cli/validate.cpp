@@ -6,6 +6,7 @@
 
 #include "cullide/cullide.h"
 #include "cullide/error.h"
+#include "cullide/options.h"
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/raster/gl_backend.h"
 #include "cullide/raster/png.h"
@@ -25,10 +26,7 @@ namespace {
 
 struct ValidateOptions {
     std::string scene;
-    std::string method = "modified";
-    std::string resolution = "500";
-    std::string depth = "24";
-    std::string directions = "axes";
+    OptionText cullide;  // method, resolution, depth, directions (cullide/options.h)
     long frame = -1;
     std::string png;
     size_t worst = 10;
@@ -57,21 +55,10 @@ void writeQueryPng(const raster::CoverageCapture& c, const OrthoView& view, cons
 }
 
 int runValidate(const ValidateOptions& o) {
-    CullideOptions options;
-    options.method = parseCullMethod(o.method);
-    std::tie(options.width, options.height) = parseResolution(o.resolution);
-    try {
-        options.depth = DepthFormat::parse(o.depth);
-    } catch (const InputError& e) {
-        throw InputError("option --depth", e.what());
-    }
-    options.directions = parseDirections(o.directions);
-    options.validate();
+    CullideOptions options = parseCullideOptions(o.cullide);
 
     const Animation animation = loadScene(o.scene);
-    if (o.frame >= 0 && size_t(o.frame) >= animation.frameCount())
-        throw InputError("option --frame", "frame " + std::to_string(o.frame) + " requested, but " + o.scene + " has " +
-                                               std::to_string(animation.frameCount()) + " frame(s)");
+    const auto [first, last] = selectFrames(animation, o.frame, o.scene);
 
     const std::unique_ptr<raster::GlBackend> gl = raster::makeGlBackend();
     const DepthFormat effective = gl->effectiveFormat(options.depth);
@@ -95,8 +82,6 @@ int runValidate(const ValidateOptions& o) {
                 toString(options.method), options.width, options.height, options.depth.name().c_str(),
                 options.directions.size(), cpu->describe().c_str(), gl->describe().c_str());
 
-    const size_t first = o.frame >= 0 ? size_t(o.frame) : 0;
-    const size_t last = o.frame >= 0 ? size_t(o.frame) + 1 : animation.frameCount();
     raster::TeeBackend tee(*cpu, *gl, iv);
     size_t pcsDiffering = 0;
     for (size_t f = first; f < last; ++f) {
@@ -191,11 +176,12 @@ void addValidateCommand(CLI::App& app, Action& action) {
     CLI::App* sub = app.add_subcommand(
         "validate", "Run the same Cullide workload on the CPU reference and on GL and compare every query");
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
-    sub->add_option("--method", o->method, "original | modified")->capture_default_str();
-    sub->add_option("--resolution", o->resolution, "Viewport: N or WxH pixels")->capture_default_str();
-    sub->add_option("--depth", o->depth, "Depth format: unorm bits (mapped to GL's D16/D24/D32) or float")
+    sub->add_option("--method", o->cullide.method, "original | modified")->capture_default_str();
+    sub->add_option("--resolution", o->cullide.resolution, "Viewport: N or WxH pixels")->capture_default_str();
+    sub->add_option("--depth", o->cullide.depth, "Depth format: unorm bits (mapped to GL's D16/D24/D32) or float")
         ->capture_default_str();
-    sub->add_option("--directions", o->directions, "View directions: 'axes', a count N, or a list")->capture_default_str();
+    sub->add_option("--directions", o->cullide.directions, "View directions: 'axes', a count N, or a list")
+        ->capture_default_str();
     sub->add_option("--frame", o->frame, "Validate only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
     sub->add_option("--png", o->png, "Write difference pictures of the worst queries' coverage into this folder");
     sub->add_option("--worst", o->worst, "How many worst queries to list")->capture_default_str();

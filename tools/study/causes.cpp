@@ -178,20 +178,9 @@ constexpr uint32_t kNever = std::numeric_limits<uint32_t>::max();
 Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth, DepthBackend& backend,
                                  const CullideOptions& options) {
     // The scene as one geometry in (object, triangle) order, as fitView needs it.
-    const size_t n = scene.objects.size();
-    std::vector<Mesh> world(n);
-    std::vector<uint32_t> offset(n + 1, 0);
-    std::vector<Vec3f> positions;
-    std::vector<Triangle> triangles;
-    for (size_t i = 0; i < n; ++i) {
-        world[i] = scene.worldMesh(i);
-        offset[i + 1] = offset[i] + uint32_t(world[i].triangles.size());
-        const uint32_t base = uint32_t(positions.size());
-        positions.insert(positions.end(), world[i].positions.begin(), world[i].positions.end());
-        for (const Triangle& t : world[i].triangles) triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-    }
-    const size_t total = triangles.size();
-    auto global = [&](uint32_t object, uint32_t triangle) { return offset[object] + triangle; };
+    const FlatScene world = flatten(scene);
+    const size_t total = world.mesh.triangles.size();
+    auto global = [&](uint32_t object, uint32_t triangle) { return world.triangle(object, triangle); };
 
     std::vector<char> colliding(total, 0);
     for (const oracle::IntersectingPair& p : truth.pairs) colliding[global(p.objectA, p.triangleA)] = colliding[global(p.objectB, p.triangleB)] = 1;
@@ -215,8 +204,8 @@ Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth,
                     if (!ranges.empty() && ranges.back().first + ranges.back().count == g) ++ranges.back().count;
                     else ranges.push_back({uint32_t(g), 1});
                 }
-            views[call] = fitView(positions, triangles, ranges, options.directions[st.direction], options.width,
-                                  options.height, options.depth);
+            views[call] = fitView(world.mesh.positions, world.mesh.triangles, ranges, options.directions[st.direction],
+                                  options.width, options.height, options.depth);
             directionOf[call] = st.direction;
         }
         inPcs.swap(next);
@@ -227,8 +216,8 @@ Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth,
     a.result = runCullide(scene, backend, o);
 
     auto corners = [&](uint32_t object, uint32_t triangle) {
-        const Mesh& m = world[object];
-        const Triangle& t = m.triangles[triangle];
+        const Mesh& m = world.mesh;
+        const Triangle& t = m.triangles[global(object, triangle)];
         return std::array<Vec3f, 3>{m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]};
     };
     std::vector<int8_t> triangleCause(total, -1);

@@ -3,6 +3,7 @@
 #include "study.h"
 
 #include "cullide/error.h"
+#include "cullide/file_io.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
 #include "cullide/oracle/measures.h"
@@ -99,9 +100,19 @@ std::string csvField(const nlohmann::ordered_json& v) {
 
 }  // namespace
 
+OptionNames specOptionNames(const std::string& source) {
+    auto field = [&](const char* key) { return source + ": field '" + key + "'"; };
+    OptionNames n;
+    n.method = field("methods"), n.resolution = field("resolutions"), n.depth = field("depths");
+    n.directions = field("directions"), n.hierarchy = field("hierarchies"), n.leafSize = field("leaf_sizes");
+    n.branching = field("branching");
+    return n;
+}
+
 Spec parseSpec(const nlohmann::json& j, const std::string& source) {
     if (!j.is_object()) throw InputError(source, "a study spec is a JSON object");
     Spec s;
+    s.names = specOptionNames(source);
     for (const auto& [key, v] : j.items()) {
         if (key == "scenes") s.scenes = listOf<std::string>(v, source, "scenes");
         else if (key == "methods") s.methods = listOf<std::string>(v, source, "methods");
@@ -243,7 +254,7 @@ std::vector<RunConfig> expand(const Spec& spec) {
                                             out.push_back(c);
                                         }
     }
-    for (const RunConfig& c : out) (void)cullideOptions(c);  // every value checked before any run
+    for (const RunConfig& c : out) (void)cullideOptions(c, spec.names);  // every value checked before any run
     return out;
 }
 
@@ -273,18 +284,19 @@ std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads) 
     throw InputError("backend", "'" + name + "': cpu or gl");
 }
 
-CullideOptions cullideOptions(const RunConfig& c) {
-    CullideOptions o;
-    o.method = parseCullMethod(c.method);
-    std::tie(o.width, o.height) = parseResolution(c.resolution);
-    o.depth = DepthFormat::parse(c.depth);
-    o.directions = parseDirections(c.directions);
-    o.hierarchy.kind = parseHierarchyKind(c.hierarchy);
-    o.hierarchy.leafSize = c.leafSize;
-    o.hierarchy.branching = c.branching;
-    o.hierarchy.seed = c.seed;
-    o.validate();
-    return o;
+CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names) {
+    OptionText t;
+    t.method = c.method, t.resolution = c.resolution, t.depth = c.depth, t.directions = c.directions;
+    t.hierarchy = c.hierarchy, t.leafSize = c.leafSize, t.branching = c.branching, t.seed = c.seed;
+    return parseCullideOptions(t, names);
+}
+
+nlohmann::ordered_json passJson(const PassStats& p) {
+    return {{"level", p.level},           {"direction", p.direction},
+            {"nodes_in", p.nodesIn},      {"nodes_out", p.nodesOut},
+            {"triangles_in", p.trianglesIn}, {"triangles_out", p.trianglesOut},
+            {"triangles_rendered", p.trianglesRendered}, {"queries", p.queries},
+            {"seconds", p.seconds}};
 }
 
 nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const oracle::Truth* truth, int repeats,
@@ -376,11 +388,7 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     }
     j["backend_description"] = backend.describe();
     nlohmann::ordered_json passes = nlohmann::ordered_json::array();
-    for (const PassStats& p : r.passes)
-        passes.push_back({{"level", p.level}, {"direction", p.direction}, {"nodes_in", p.nodesIn},
-                          {"nodes_out", p.nodesOut}, {"triangles_in", p.trianglesIn},
-                          {"triangles_out", p.trianglesOut}, {"triangles_rendered", p.trianglesRendered},
-                          {"queries", p.queries}, {"seconds", p.seconds}});
+    for (const PassStats& p : r.passes) passes.push_back(passJson(p));
     j["passes"] = passes;
     return j;
 }
@@ -448,17 +456,8 @@ namespace {
 void writeAll(const OutputPaths& p, const std::vector<nlohmann::ordered_json>& records) {
     std::string csv = csvHeader(), jsonl;
     for (const auto& r : records) csv += csvRow(r), jsonl += r.dump() + "\n";
-    for (const auto& [path, bytes] : {std::pair{p.csv, csv}, std::pair{p.jsonl, jsonl}}) {
-        const std::filesystem::path tmp = std::filesystem::path(path).concat(".tmp");
-        {
-            std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-            f << bytes;
-            if (!f) throw InputError(path.string(), "cannot write");
-        }
-        std::error_code ec;
-        std::filesystem::rename(tmp, path, ec);
-        if (ec) throw InputError(path.string(), "cannot write: " + ec.message());
-    }
+    writeFileAtomically(p.csv, csv);
+    writeFileAtomically(p.jsonl, jsonl);
 }
 
 std::string duration(double s) {

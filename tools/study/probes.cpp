@@ -4,6 +4,7 @@
 #include "causes.h"
 #include "study.h"
 
+#include "cullide/options.h"
 #include "cullide/oracle/measures.h"
 #include "cullide/raster/cpu_backend.h"
 
@@ -40,16 +41,9 @@ Object anchor(double x0, double y0) {
 
 // The view runCullide fits for its first call in direction `dir` (every triangle of the scene).
 OrthoView firstView(const Scene& scene, const Vec3d& dir, const CullideOptions& o) {
-    std::vector<Vec3f> positions;
-    std::vector<Triangle> triangles;
-    for (size_t i = 0; i < scene.objects.size(); ++i) {
-        const Mesh m = scene.worldMesh(i);
-        const uint32_t base = uint32_t(positions.size());
-        positions.insert(positions.end(), m.positions.begin(), m.positions.end());
-        for (const Triangle& t : m.triangles) triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-    }
-    const TriangleRange all{0, uint32_t(triangles.size())};
-    return fitView(positions, triangles, std::span(&all, 1), dir, o.width, o.height, o.depth);
+    const FlatScene flat = flatten(scene);
+    const TriangleRange all{0, uint32_t(flat.mesh.triangles.size())};
+    return fitView(flat.mesh.positions, flat.mesh.triangles, std::span(&all, 1), dir, o.width, o.height, o.depth);
 }
 
 struct Trial {
@@ -79,15 +73,15 @@ void putTrial(nlohmann::ordered_json& row, const Trial& t) {
     for (int k = 0; k < kCauseCount; ++k) row[std::string("fp_") + toString(Cause(k))] = t.causes[size_t(k)];
 }
 
+// The sweeps' values come from `cullide study`'s options (--methods, --depths, --resolution,
+// --directions).
 CullideOptions probeOptions(const std::string& method, const std::string& depth, int resolution,
                             const std::string& directions) {
-    CullideOptions o;
-    o.method = parseCullMethod(method);
-    o.depth = DepthFormat::parse(depth);
-    o.width = o.height = resolution;
-    o.directions = parseDirections(directions);
-    o.hierarchy.leafSize = 16;
-    return o;
+    OptionText t;
+    t.method = method, t.depth = depth, t.resolution = std::to_string(resolution), t.directions = directions;
+    OptionNames names;
+    names.method = "option --methods", names.depth = "option --depths";
+    return parseCullideOptions(t, names);
 }
 
 Vec3f rotZ(const Vec3d& p, double psi, const Vec3d& offset) {

@@ -19,6 +19,7 @@
 
 #include "cullide/cullide.h"
 #include "cullide/depth_backend.h"
+#include "cullide/options.h"
 #include "cullide/oracle/oracle.h"
 #include "cullide/scene.h"
 
@@ -32,6 +33,9 @@
 #include <vector>
 
 namespace cullide::study {
+
+// What a spec's axes are called in errors: `source`'s keys ("spec.json: field 'depths'").
+OptionNames specOptionNames(const std::string& source);
 
 struct Spec {
     std::vector<std::string> scenes;
@@ -47,6 +51,8 @@ struct Spec {
     uint64_t seed = 1;
     int repeats = 3;      // timed runs per configuration (median, min, max)
     bool oracle = true;   // measure against the oracle and attribute causes
+    // Each axis' name in errors: its spec key, or the command-line option that set it.
+    OptionNames names = specOptionNames("study spec");
 };
 
 // Reads a JSON spec: {"scenes": [...], "methods": [...], "resolutions": [...], "depths": [...],
@@ -93,8 +99,11 @@ std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads);
 Scene loadStudyScene(const std::string& text, uint32_t frame);
 size_t studyFrameCount(const std::string& text);
 
-// Options of a configuration (throws InputError on bad values).
-CullideOptions cullideOptions(const RunConfig& c);
+// Options of a configuration (throws InputError on bad values, naming them by `names`).
+CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names = specOptionNames("study spec"));
+
+// One reducePCS call's statistics as a record's (and prune --json's) "passes" entry.
+nlohmann::ordered_json passJson(const PassStats& p);
 
 // Runs one configuration: `repeats` timed runs, then (with the oracle) one instrumented run for
 // the causes. `truth` may be null when the oracle is off (the measures are then null). Returns

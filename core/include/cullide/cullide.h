@@ -66,11 +66,7 @@ CullMethod parseCullMethod(const std::string& text);  // "original" | "modified"
 std::vector<Vec3d> axisDirections();
 // N directions spread over the sphere (a Fibonacci lattice, deterministic). N >= 1.
 std::vector<Vec3d> spreadDirections(uint32_t n);
-// Parses a viewport "N" (N x N) or "WxH", each side 1..16384; InputError("option --resolution").
-std::pair<int, int> parseResolution(const std::string& text);
-
-// Parses "axes", "N" (spread), or a list "x,-y,z" / "1 0 0;0 1 1" of directions; InputError.
-std::vector<Vec3d> parseDirections(const std::string& text);
+// Option text (viewports, direction lists, the whole CullideOptions): cullide/options.h.
 
 // One reducePCS call: the data behind the paper's Figures 9-11.
 struct PassStats {
@@ -120,6 +116,14 @@ CullideResult runCullide(const Scene& scene, DepthBackend& backend, const Cullid
 struct TriangleRange {
     uint32_t first = 0, count = 0;
 };
+
+// The commands of one modified reducePCS call (the seed paper's Figure 3), both passes, appended
+// to `list`: forward, each range in order is drawn with LESS, then queried with GREATER against
+// everything drawn so far (itself included); reverse, each range from the last is queried with
+// GREATER against the ranges after it, then drawn with LESS. forwardQuery[i] and reverseQuery[i]
+// receive the query numbers of ranges[i] (both spans as long as `ranges`).
+void appendModifiedReducePcs(CommandList& list, std::span<const TriangleRange> ranges,
+                             std::span<uint32_t> forwardQuery, std::span<uint32_t> reverseQuery);
 
 // Fits the orthographic view of direction `dir` tightly to the triangles in `ranges` (see the
 // conventions above). Near and far are widened by two depth units of `depth` each, so that no

@@ -42,6 +42,19 @@ struct Scene {
     Mesh worldMesh(size_t i) const;
 };
 
+// The whole scene as one geometry, as a backend draws it: every object's world mesh
+// (Scene::worldMesh), in object order, its vertex indices offset past the objects before it.
+struct FlatScene {
+    Mesh mesh;
+    // Object i's triangles are [firstTriangle[i], firstTriangle[i + 1]) in mesh.triangles (one
+    // entry per object, plus the total).
+    std::vector<uint32_t> firstTriangle;
+
+    uint32_t triangle(uint32_t object, uint32_t t) const { return firstTriangle[object] + t; }
+};
+// Throws InputError("scene", ...) when the scene has more than 2^32 vertices or triangles.
+FlatScene flatten(const Scene& scene);
+
 // What one frame of an animation changes for one object.
 struct ObjectPose {
     std::optional<Transform> transform;          // replaces the object's transform

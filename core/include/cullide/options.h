@@ -1,0 +1,60 @@
+// Option text -> CullideOptions: the one parser behind every command that takes Cullide's
+// options (`cullide prune`, `cullide validate`, `cullide study` from its command line or a JSON
+// spec, and the stability sweeps).
+//
+// Conventions
+//   - Values arrive as the user typed them: text for the method, viewport, depth format,
+//     directions and hierarchy kind; numbers for the hierarchy's sizes and seed.
+//   - Every error is InputError(name, cause). `name` is what the user typed the value as
+//     (OptionNames: "option --depth" by default, "option --depths" or "spec.json: field 'depths'"
+//     in a study); `cause` is the same words for the same bad value whichever command it came
+//     through.
+#pragma once
+
+#include "cullide/cullide.h"
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace cullide {
+
+// The hierarchy sizes the parser accepts (leaf size 1..kMaxLeafSize, branching
+// kMinBranching..kMaxBranching).
+inline constexpr uint32_t kMaxLeafSize = 1'000'000;
+inline constexpr uint32_t kMinBranching = 2, kMaxBranching = 64;
+
+// CullideOptions as typed; the defaults give CullideOptions' defaults.
+struct OptionText {
+    std::string method = "modified";        // original | modified | reliable
+    std::string resolution = "500";         // N or WxH, each side 1..16384
+    std::string depth = "24";               // unorm bits 8..32 (24, d24, unorm24) or float (float, f32, d32f)
+    std::string directions = "axes";        // axes | N (spread) | a list x,-y,z or '1 0 0;0 1 1'
+    std::string hierarchy = "connectivity"; // connectivity | random
+    uint32_t leafSize = 16;
+    uint32_t branching = 4;
+    uint64_t seed = 1;  // of the random hierarchy
+};
+
+// What each value is called in error messages: the source part of InputError.
+struct OptionNames {
+    std::string method = "option --method";
+    std::string resolution = "option --resolution";
+    std::string depth = "option --depth";
+    std::string directions = "option --directions";
+    std::string hierarchy = "option --hierarchy";
+    std::string leafSize = "option --leaf-size";
+    std::string branching = "option --branching";
+};
+
+// The whole set; throws InputError naming the first bad value (in the order of OptionText).
+CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& names = {});
+
+// A viewport "N" (N x N) or "WxH", each side 1..16384.
+std::pair<int, int> parseResolution(const std::string& text, const std::string& name = "option --resolution");
+// "axes", "N" (N spread directions, 1..10000), or a list "x,-y,z" / "1 0 0;0 1 1" of non-zero
+// directions (normalized).
+std::vector<Vec3d> parseDirections(const std::string& text, const std::string& name = "option --directions");
+
+}  // namespace cullide

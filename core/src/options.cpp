@@ -1,0 +1,98 @@
+// Option text -> CullideOptions (options.h).
+#include "cullide/options.h"
+
+#include "cullide/error.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+#include <tuple>
+
+namespace cullide {
+
+namespace {
+
+// Runs `parse`, re-throwing its InputError under `name` with the same cause: the pieces parsed
+// elsewhere (method, depth format, hierarchy kind) name their own default source.
+template <typename Parse>
+auto named(const std::string& name, Parse&& parse) {
+    try {
+        return parse();
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        const size_t prefix = e.source().size() + 2;  // "source: "
+        throw InputError(name, what.size() >= prefix ? what.substr(prefix) : what);
+    }
+}
+
+}  // namespace
+
+std::pair<int, int> parseResolution(const std::string& text, const std::string& name) {
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) == 3 && (x == 'x' || x == 'X')) {
+    } else if (std::sscanf(text.c_str(), "%d%c", &w, &extra) == 1) {
+        h = w;
+    } else {
+        throw InputError(name, "cannot read '" + text + "' (expected N or WxH, e.g. 500 or 640x480)");
+    }
+    if (w < 1 || h < 1 || w > 16384 || h > 16384)
+        throw InputError(name, "'" + text + "': each side must be 1 to 16384 pixels");
+    return {w, h};
+}
+
+std::vector<Vec3d> parseDirections(const std::string& text, const std::string& name) {
+    if (text == "axes") return axisDirections();
+    if (!text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+        if (text.size() > 6) throw InputError(name, "too many directions: " + text);
+        return named(name, [&] { return spreadDirections(uint32_t(std::stoul(text))); });
+    }
+    std::vector<Vec3d> dirs;
+    const char separator = text.find(';') != std::string::npos ? ';' : ',';
+    std::stringstream items(text);
+    std::string item;
+    while (std::getline(items, item, separator)) {
+        item.erase(0, item.find_first_not_of(' '));
+        item.erase(item.find_last_not_of(' ') + 1);
+        Vec3d d;
+        if (item == "x" || item == "+x") d = Vec3d(1, 0, 0);
+        else if (item == "-x") d = Vec3d(-1, 0, 0);
+        else if (item == "y" || item == "+y") d = Vec3d(0, 1, 0);
+        else if (item == "-y") d = Vec3d(0, -1, 0);
+        else if (item == "z" || item == "+z") d = Vec3d(0, 0, 1);
+        else if (item == "-z") d = Vec3d(0, 0, -1);
+        else {
+            std::stringstream nums(item);
+            std::string rest;
+            if (!(nums >> d.x() >> d.y() >> d.z()) || (nums >> rest))
+                throw InputError(name, "cannot read direction '" + item +
+                                           "' (expected axes, a count, or a list like x,-y,z or '1 0 0;0 1 1')");
+        }
+        if (!d.allFinite() || d.norm() == 0) throw InputError(name, "direction '" + item + "' is zero or not finite");
+        dirs.push_back(d.normalized());
+    }
+    if (dirs.empty()) throw InputError(name, "no directions given");
+    return dirs;
+}
+
+CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& names) {
+    CullideOptions o;
+    o.method = named(names.method, [&] { return parseCullMethod(text.method); });
+    std::tie(o.width, o.height) = parseResolution(text.resolution, names.resolution);
+    o.depth = named(names.depth, [&] { return DepthFormat::parse(text.depth); });
+    o.directions = parseDirections(text.directions, names.directions);
+    o.hierarchy.kind = named(names.hierarchy, [&] { return parseHierarchyKind(text.hierarchy); });
+    if (text.leafSize < 1 || text.leafSize > kMaxLeafSize)
+        throw InputError(names.leafSize, std::to_string(text.leafSize) + ": the leaf size must be 1 to " +
+                                             std::to_string(kMaxLeafSize) + " triangles");
+    if (text.branching < kMinBranching || text.branching > kMaxBranching)
+        throw InputError(names.branching, std::to_string(text.branching) + ": the branching must be " +
+                                              std::to_string(kMinBranching) + " to " + std::to_string(kMaxBranching));
+    o.hierarchy.leafSize = text.leafSize;
+    o.hierarchy.branching = text.branching;
+    o.hierarchy.seed = text.seed;
+    o.validate();  // nothing left to refuse: the checks above cover it
+    return o;
+}
+
+}  // namespace cullide

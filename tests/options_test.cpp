@@ -1,0 +1,116 @@
+// The one option parser (core/include/cullide/options.h): text -> CullideOptions, and errors that
+// name the option as the user typed it.
+#include "cullide/options.h"
+
+#include "cullide/error.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+using namespace cullide;
+
+namespace {
+
+// The message of the InputError `parse` throws ("" when it throws none).
+template <typename F>
+std::string messageOf(F&& parse) {
+    try {
+        parse();
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+}  // namespace
+
+// The defaults of the text form are CullideOptions' defaults.
+TEST(Options, DefaultsAreCullideDefaults) {
+    const CullideOptions o = parseCullideOptions({});
+    const CullideOptions d;
+    EXPECT_EQ(o.method, d.method);
+    EXPECT_EQ(o.width, d.width);
+    EXPECT_EQ(o.height, d.height);
+    EXPECT_EQ(o.depth, d.depth);
+    EXPECT_EQ(o.directions, d.directions);
+    EXPECT_EQ(o.hierarchy.kind, d.hierarchy.kind);
+    EXPECT_EQ(o.hierarchy.leafSize, d.hierarchy.leafSize);
+    EXPECT_EQ(o.hierarchy.branching, d.hierarchy.branching);
+    EXPECT_EQ(o.hierarchy.seed, d.hierarchy.seed);
+}
+
+TEST(Options, EveryFieldIsParsed) {
+    OptionText t;
+    t.method = "original", t.resolution = "640x480", t.depth = "float", t.directions = "x,-y";
+    t.hierarchy = "random", t.leafSize = 8, t.branching = 2, t.seed = 9;
+    const CullideOptions o = parseCullideOptions(t);
+    EXPECT_EQ(o.method, CullMethod::Original);
+    EXPECT_EQ(o.width, 640);
+    EXPECT_EQ(o.height, 480);
+    EXPECT_EQ(o.depth, DepthFormat::float32());
+    ASSERT_EQ(o.directions.size(), 2u);
+    EXPECT_EQ(o.directions[1], Vec3d(0, -1, 0));
+    EXPECT_EQ(o.hierarchy.kind, HierarchyKind::Random);
+    EXPECT_EQ(o.hierarchy.leafSize, 8u);
+    EXPECT_EQ(o.hierarchy.branching, 2u);
+    EXPECT_EQ(o.hierarchy.seed, 9u);
+    EXPECT_EQ(parseResolution("300"), std::make_pair(300, 300));
+    EXPECT_EQ(parseDirections("5").size(), 5u);
+}
+
+// Every field's bad value: refused under the name given for that field, never another one (a
+// value parsed by a piece that names its own default source, "depth format" or "option --method",
+// must come out under the caller's name).
+TEST(Options, ErrorsNameTheFieldAsTyped) {
+    OptionNames names;
+    names.method = "M", names.resolution = "R", names.depth = "D", names.directions = "V", names.hierarchy = "H";
+    names.leafSize = "L", names.branching = "B";
+    const struct {
+        void (*bad)(OptionText&);
+        const char* name;
+    } cases[] = {
+        {[](OptionText& t) { t.method = "reliable-ish"; }, "M: "},
+        {[](OptionText& t) { t.resolution = "0"; }, "R: "},
+        {[](OptionText& t) { t.resolution = "20000x10"; }, "R: "},
+        {[](OptionText& t) { t.resolution = "axb"; }, "R: "},
+        {[](OptionText& t) { t.depth = "7"; }, "D: "},
+        {[](OptionText& t) { t.depth = "33"; }, "D: "},
+        {[](OptionText& t) { t.depth = "half"; }, "D: "},
+        {[](OptionText& t) { t.directions = "0"; }, "V: "},
+        {[](OptionText& t) { t.directions = "20000"; }, "V: "},
+        {[](OptionText& t) { t.directions = "1234567"; }, "V: "},
+        {[](OptionText& t) { t.directions = "x,w"; }, "V: "},
+        {[](OptionText& t) { t.directions = "0 0 0"; }, "V: "},
+        {[](OptionText& t) { t.directions = ""; }, "V: "},
+        {[](OptionText& t) { t.hierarchy = "octree"; }, "H: "},
+        {[](OptionText& t) { t.leafSize = 0; }, "L: "},
+        {[](OptionText& t) { t.leafSize = kMaxLeafSize + 1; }, "L: "},
+        {[](OptionText& t) { t.branching = 1; }, "B: "},
+        {[](OptionText& t) { t.branching = kMaxBranching + 1; }, "B: "},
+    };
+    for (const auto& c : cases) {
+        OptionText t;
+        c.bad(t);
+        const std::string m = messageOf([&] { parseCullideOptions(t, names); });
+        EXPECT_EQ(m.rfind(c.name, 0), 0u) << m;
+        // The cause follows the name directly: no second source inside.
+        EXPECT_EQ(m.find("option --"), std::string::npos) << m;
+        EXPECT_EQ(m.find("depth format:"), std::string::npos) << m;
+    }
+}
+
+// The trap of issue 12: `prune --depth 7` named the option, `study --depths 7` did not. The same
+// bad value gives the same cause under any name; the default names are prune's options.
+TEST(Options, SameBadValueSameCause) {
+    OptionText t;
+    t.depth = "7";
+    OptionNames study;
+    study.depth = "option --depths";
+    const std::string prune = messageOf([&] { parseCullideOptions(t); });
+    const std::string sweep = messageOf([&] { parseCullideOptions(t, study); });
+    ASSERT_EQ(prune.rfind("option --depth: ", 0), 0u) << prune;
+    ASSERT_EQ(sweep.rfind("option --depths: ", 0), 0u) << sweep;
+    EXPECT_EQ(prune.substr(prune.find(": ")), sweep.substr(sweep.find(": ")));
+    EXPECT_NE(prune.find("8 to 32"), std::string::npos) << prune;
+}
