@@ -17,7 +17,6 @@
 #include "cullide/error.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/intersections.h>
 
 #include <algorithm>
 #include <bit>

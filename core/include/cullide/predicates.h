@@ -68,9 +68,8 @@ Contact triangleContactFromSigns(const TrianglePoints& a, const TrianglePoints& 
 // Whether the closed segment [s0, s1] meets the closed non-degenerate triangle t.
 bool triangleSegmentIntersect(const TrianglePoints& t, const Vec3d& s0, const Vec3d& s1);
 
-// Two faces of one mesh, with their vertex indices: the sharing rules (cullide/oracle/oracle.h,
-// docs/oracle.md) then the plain test. Pass sameMesh = false for faces of different objects
-// (indices ignored).
+// Two faces of one mesh, with their vertex indices: the sharing rules (docs/oracle.md) then the
+// plain test. Pass sameMesh = false for faces of different objects (indices ignored).
 Contact faceContact(const TrianglePoints& a, const Triangle& ia, const TrianglePoints& b, const Triangle& ib,
                     bool sameMesh);
 
