@@ -1,13 +1,15 @@
-// Tests for oracle/src/oracle.cpp (and the sharing rules of predicates.cpp, end to end): hand-built
-// traps, the broad phase against all pairs, determinism across thread counts, the exact stage,
-// bad input, and the cross-check with CGAL's self_intersections pair for pair.
+// Tests for oracle/src/oracle.cpp (and the sharing rules of cullide/predicates.h, end to end):
+// hand-built traps, the broad phase against all pairs, determinism across thread counts, the exact
+// stage, bad input, and the cross-check with CGAL's self_intersections pair for pair.
 #include "cullide/oracle/oracle.h"
 
 #include "cullide/error.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
 #include "cullide/oracle/cgal_reference.h"
-#include "cullide/oracle/predicates.h"
+#include "cullide/predicates.h"
+
+#include "test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -292,32 +294,7 @@ TEST(OracleCgal, GeneratedScenesSameAsCgal) {
 // make the mesh non-manifold, which CGAL's Surface_mesh refuses: the CGAL cross-check of the same
 // paths is SubdividedCowSameAsCgal).
 TEST(Oracle, NearlyCoplanarNeighboursMatchFaceContact) {
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<float> u(-1, 1);
-    std::uniform_int_distribution<int> ulps(-3, 3), pick(0, 9);
-    Mesh m;
-    for (int fan = 0; fan < 30; ++fan) {
-        const uint32_t centre = uint32_t(m.positions.size());
-        const Vec3f c(float(fan % 6) * 3, float(fan / 6) * 3, 0.5f);
-        m.positions.push_back(c);
-        const int k = 5 + fan % 4;
-        for (int i = 0; i < k; ++i) {
-            const float angle = float(i) * 6.2831853f / float(k) + 0.2f * u(rng);
-            float z = c.z();
-            for (int step = pick(rng) < 5 ? 0 : ulps(rng); step != 0; step += step > 0 ? -1 : 1)
-                z = std::nextafter(z, step > 0 ? 1.0f : 0.0f);
-            if (pick(rng) == 0) z += 0.05f * u(rng);  // now and then a real fold
-            m.positions.push_back(c + Vec3f(std::cos(angle), std::sin(angle), z - c.z()));
-        }
-        for (int i = 0; i < k; ++i) m.triangles.push_back({centre, centre + 1 + uint32_t(i), centre + 1 + uint32_t((i + 1) % k)});
-        // Two triangles across the fan from its centre: crossing, touching or apart.
-        for (int extra = 0; extra < 2; ++extra) {
-            const uint32_t a = uint32_t(m.positions.size());
-            m.positions.push_back(c + Vec3f(u(rng), u(rng), 0.02f * u(rng)));
-            m.positions.push_back(c + Vec3f(u(rng), u(rng), pick(rng) < 6 ? 0.0f : 0.02f * u(rng)));
-            m.triangles.push_back({centre, a, a + 1});
-        }
-    }
+    const Mesh m = test::nearlyCoplanarFans(11, 30);
     std::vector<IntersectingPair> expected;
     auto pts = [&](uint32_t t) {
         const Triangle& i = m.triangles[t];

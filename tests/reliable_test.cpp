@@ -21,9 +21,12 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <random>
+#include <set>
 
 using namespace cullide;
 using cullide::test::box;
@@ -141,19 +144,104 @@ TEST(ReliablePieces, DistanceTwoColouringGivesAtMostOneNeighbourPerClass) {
     }
 }
 
-// Trap: the rules for faces sharing vertices. Adjacent faces of a smooth surface (shared edge or
-// vertex, nothing else) do not intersect; a fold-over (coplanar, same side) and a face passing
-// through its neighbour's opposite edge do.
-TEST(ReliablePieces, ExactPairRulesMirrorTheOracle) {
-    std::vector<Vec3f> p{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0.5f}, {0.3f, 0.3f, 0}, {-1, -1, 0},
-                         {0.2f, 0.2f, -1}, {0.2f, 0.2f, 1}, {1, 1, 0}};
-    EXPECT_FALSE(detail::mayIntersect(p, {0, 1, 2}, {1, 3, 2}));   // shared edge, bent
-    EXPECT_TRUE(detail::mayIntersect(p, {0, 1, 2}, {1, 4, 2}));    // shared edge, coplanar fold-over
-    EXPECT_FALSE(detail::mayIntersect(p, {0, 1, 2}, {1, 8, 2}));   // shared edge, coplanar, opposite sides
-    EXPECT_FALSE(detail::mayIntersect(p, {0, 1, 2}, {0, 5, 3}));   // shared vertex only
-    EXPECT_TRUE(detail::mayIntersect(p, {0, 1, 2}, {0, 6, 7}));    // shared vertex, crosses the interior
-    EXPECT_TRUE(detail::mayIntersect(p, {0, 1, 2}, {0, 1, 2}));    // duplicated face
-    EXPECT_FALSE(detail::mayIntersect(p, {0, 4, 8}, {6, 7, 3}));   // a collinear face is in no pair
+// Random fans, one mesh, fans on a grid 3 apart: around each centre 4 to 8 rim triangles, each
+// sharing an edge with the next and the centre with all, their rim vertices in random directions
+// (so in random order around the centre): in 3D (folds, faces through a neighbour's opposite
+// edge) or, every other fan, all exactly on the centre's plane (coplanar fold-overs, wedges that
+// overlap at the centre). Now and then a duplicated face and a degenerate one (two corners at one
+// point); two free triangles through each fan share no vertex with it.
+Mesh randomFans(uint32_t seed, int fans) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::uniform_int_distribution<int> pick(0, 9);
+    Mesh m;
+    for (int fan = 0; fan < fans; ++fan) {
+        const uint32_t centre = uint32_t(m.positions.size());
+        const Vec3f c(float(fan % 6) * 3, float(fan / 6) * 3, 0.5f);
+        const bool planar = fan % 2 == 1;
+        m.positions.push_back(c);
+        const uint32_t k = 5 + uint32_t(fan % 5);  // rim vertices
+        for (uint32_t i = 0; i < k; ++i) m.positions.push_back(c + Vec3f(u(rng), u(rng), planar ? 0.0f : u(rng)));
+        for (uint32_t i = 1; i < k; ++i) m.triangles.push_back({centre, centre + i, centre + i + 1});
+        if (pick(rng) < 3) {
+            const Triangle twin = m.triangles[m.triangles.size() - 1 - uint32_t(pick(rng)) % (k - 1)];
+            m.triangles.push_back(twin);  // a duplicated rim face
+        }
+        if (pick(rng) < 3) {
+            m.positions.push_back(m.positions[centre + 1]);  // coincides with the first rim vertex
+            m.triangles.push_back({centre, centre + 1, uint32_t(m.positions.size() - 1)});
+        }
+        for (int extra = 0; extra < 2; ++extra) {
+            const uint32_t a = uint32_t(m.positions.size());
+            for (int corner = 0; corner < 3; ++corner)
+                m.positions.push_back(c + Vec3f(u(rng), u(rng), planar && pick(rng) < 5 ? 0.0f : 0.3f * u(rng)));
+            m.triangles.push_back({a, a + 1, a + 2});
+        }
+    }
+    return m;
+}
+
+// The one-way promise of the exact pair rule: on every pair of the mesh, never "no"
+// (mayIntersect false) where the oracle (its whole pipeline, fast paths included) reports a pair.
+// Returns, by the number of shared vertices (0..3), how many pairs the oracle reports and how many
+// the rule answers "no" (so that both answers are exercised).
+struct RuleCounts {
+    std::array<size_t, 4> contacts{}, no{};
+};
+RuleCounts expectNeverNoWhereTheOracleSeesContact(const Mesh& m, const char* what) {
+    Scene scene;
+    scene.objects.push_back({"fans", m, Transform::Identity()});
+    std::set<std::pair<uint32_t, uint32_t>> contacts;
+    for (const oracle::IntersectingPair& p : oracle::findIntersections(scene).pairs)
+        contacts.insert({p.triangleA, p.triangleB});
+    RuleCounts counts;
+    const uint32_t n = uint32_t(m.triangles.size());
+    for (uint32_t a = 0; a < n; ++a)
+        for (uint32_t b = a + 1; b < n; ++b) {
+            const Triangle &ta = m.triangles[a], &tb = m.triangles[b];
+            int shared = 0;
+            for (uint32_t v : ta) shared += int(std::count(tb.begin(), tb.end(), v) > 0);
+            const bool contact = contacts.count({a, b}) > 0;
+            const bool may = detail::mayIntersect(m.positions, ta, tb);
+            EXPECT_FALSE(contact && !may) << what << ": triangles " << a << ", " << b << " (" << shared << " shared)";
+            counts.contacts[shared] += contact;
+            counts.no[shared] += !may;
+        }
+    return counts;
+}
+
+// Trap: the rules for faces sharing vertices, on random fans. Neighbours sharing an edge meet only
+// in a coplanar fold-over; sharing the centre, when one passes through the other's opposite edge
+// or (coplanar) their wedges overlap; a duplicated face meets itself; a degenerate face is in no
+// pair. A rule that says "no" to any of these would let the reliable method prune a true pair.
+TEST(ReliablePieces, ExactPairRuleNeverNoWhereTheOracleSeesContactOnRandomFans) {
+    RuleCounts total;
+    for (uint32_t seed : {1u, 2u, 3u}) {
+        const RuleCounts c = expectNeverNoWhereTheOracleSeesContact(randomFans(seed, 30), "random fans");
+        for (int k = 0; k < 4; ++k) total.contacts[k] += c.contacts[k], total.no[k] += c.no[k];
+    }
+    EXPECT_GT(total.contacts[0], 50u);  // free triangles through the fans
+    EXPECT_GT(total.contacts[1], 50u);  // through the opposite edge, or overlapping coplanar wedges
+    EXPECT_GT(total.contacts[2], 20u);  // coplanar fold-overs
+    EXPECT_GT(total.contacts[3], 5u);   // duplicated faces
+    EXPECT_GT(total.no[1], 200u);       // neighbours that merely touch at the centre
+    EXPECT_GT(total.no[2], 200u);       // bent or flat neighbours
+}
+
+// Trap: neighbours the float filter cannot decide. Fans whose rim vertices lie within a few ulps
+// of the centre's plane (subdivided flat faces, rounded midpoints), some exactly on it, some
+// folded back through it: the exact signs must agree with the oracle's fast paths (its integer
+// plane signs and one-orientation shared-vertex rule) wherever those find contact.
+TEST(ReliablePieces, ExactPairRuleNeverNoWhereTheOracleSeesContactOnNearlyCoplanarFans) {
+    RuleCounts total;
+    for (uint32_t seed : {11u, 12u, 13u}) {
+        const Mesh m = test::nearlyCoplanarFans(seed, 30);
+        const RuleCounts c = expectNeverNoWhereTheOracleSeesContact(m, "nearly coplanar fans");
+        for (int k = 0; k < 4; ++k) total.contacts[k] += c.contacts[k], total.no[k] += c.no[k];
+    }
+    EXPECT_GT(total.contacts[1], 20u);  // the extra triangles across a fan, through it or on it
+    EXPECT_GT(total.no[1], 500u);       // rim triangles that meet only at the centre
+    EXPECT_GT(total.no[2], 300u);       // rim neighbours, flat within ulps or bent
 }
 
 // Trap: the GL backend has no conservative rasterization; asking for the reliable method there

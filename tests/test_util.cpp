@@ -2,6 +2,8 @@
 #include "test_util.h"
 
 #include <atomic>
+#include <cmath>
+#include <random>
 #include <stdexcept>
 #include <unistd.h>
 
@@ -70,6 +72,41 @@ Transform rotation(double ax, double ay, double az, const Vec3f& translation) {
     t.rotate(Eigen::AngleAxisf(float(az), Vec3f::UnitZ()) * Eigen::AngleAxisf(float(ay), Vec3f::UnitY()) *
              Eigen::AngleAxisf(float(ax), Vec3f::UnitX()));
     return t;
+}
+
+}  // namespace cullide::test
+
+namespace cullide::test {
+
+Mesh nearlyCoplanarFans(uint32_t seed, int fans) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::uniform_int_distribution<int> ulps(-3, 3), pick(0, 9);
+    Mesh m;
+    for (int fan = 0; fan < fans; ++fan) {
+        const uint32_t centre = uint32_t(m.positions.size());
+        const Vec3f c(float(fan % 6) * 3, float(fan / 6) * 3, 0.5f);
+        m.positions.push_back(c);
+        const int k = 5 + fan % 4;
+        for (int i = 0; i < k; ++i) {
+            const float angle = float(i) * 6.2831853f / float(k) + 0.2f * u(rng);
+            float z = c.z();
+            for (int step = pick(rng) < 5 ? 0 : ulps(rng); step != 0; step += step > 0 ? -1 : 1)
+                z = std::nextafter(z, step > 0 ? 1.0f : 0.0f);
+            if (pick(rng) == 0) z += 0.05f * u(rng);  // now and then a real fold
+            m.positions.push_back(c + Vec3f(std::cos(angle), std::sin(angle), z - c.z()));
+        }
+        for (int i = 0; i < k; ++i)
+            m.triangles.push_back({centre, centre + 1 + uint32_t(i), centre + 1 + uint32_t((i + 1) % k)});
+        // Two triangles across the fan from its centre: crossing, touching or apart.
+        for (int extra = 0; extra < 2; ++extra) {
+            const uint32_t a = uint32_t(m.positions.size());
+            m.positions.push_back(c + Vec3f(u(rng), u(rng), 0.02f * u(rng)));
+            m.positions.push_back(c + Vec3f(u(rng), u(rng), pick(rng) < 6 ? 0.0f : 0.02f * u(rng)));
+            m.triangles.push_back({centre, a, a + 1});
+        }
+    }
+    return m;
 }
 
 }  // namespace cullide::test

@@ -22,6 +22,14 @@ Mesh box(const Vec3f& lo, const Vec3f& hi);
 // Rotation about x, then y, then z (radians), then the translation.
 Transform rotation(double ax, double ay, double az, const Vec3f& translation = Vec3f::Zero());
 
+// Fans of triangles around one vertex each (one mesh, fans on a grid 3 apart, all from `seed`):
+// 5 to 8 rim triangles whose rim vertices lie within a few ulps of the centre's plane z = 0.5
+// (half of them exactly on it; now and then a real fold), and two more triangles from each centre
+// across its fan (crossing, touching or apart). Subdivided flat faces with rounded midpoints look
+// like this: the float filter cannot decide most neighbours. Non-manifold (the extra triangles):
+// not for CGAL's Surface_mesh.
+Mesh nearlyCoplanarFans(uint32_t seed, int fans);
+
 // A test-name-safe form of a data file's path ("bad/nan.off" -> "bad_nan_off"), for
 // parameterized tests' names.
 std::string paramName(const std::string& path);

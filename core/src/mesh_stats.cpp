@@ -1,15 +1,13 @@
 // Mesh statistics (see mesh_stats.h).
 //
 // Degeneracy is decided exactly: the float coordinates are converted to double (exact) and handed
-// to CGAL's filtered exact predicate `collinear` (Epick: interval arithmetic, falling back to exact
-// multiprecision when the filter cannot decide). This file alone is compiled with -frounding-math,
-// which CGAL's interval filter needs. Everything else here is integer work, made deterministic by
-// sorting instead of iterating hash tables.
+// to the exact predicate `collinear` (cullide/predicates.h: float filters, then exact arithmetic
+// when they cannot decide). Everything else here is integer work, made deterministic by sorting
+// instead of iterating hash tables.
 #include "cullide/mesh_stats.h"
 
 #include "cullide/error.h"
-
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include "cullide/predicates.h"
 
 #include <algorithm>
 #include <bit>
@@ -17,11 +15,6 @@
 
 namespace cullide {
 namespace {
-
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point = Kernel::Point_3;
-
-Point toPoint(const Vec3f& p) { return Point(double(p.x()), double(p.y()), double(p.z())); }
 
 // Union-find with path halving and union by index (the smaller root wins): deterministic.
 struct DisjointSets {
@@ -48,7 +41,8 @@ bool isDegenerate(const Mesh& mesh, size_t triangle) {
     for (uint32_t v : t) CULLIDE_CHECK(v < mesh.positions.size(), "isDegenerate: vertex index out of range");
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return true;
     // collinear() is also true when two of the points coincide.
-    return CGAL::collinear(toPoint(mesh.positions[t[0]]), toPoint(mesh.positions[t[1]]), toPoint(mesh.positions[t[2]]));
+    return collinear(mesh.positions[t[0]].cast<double>(), mesh.positions[t[1]].cast<double>(),
+                     mesh.positions[t[2]].cast<double>());
 }
 
 MeshStats computeStats(const Mesh& mesh) {

@@ -7,13 +7,12 @@
 //     Graphics 2007 / SIGGRAPH 2005 sketch): adjacent primitives always touch, so they are kept
 //     out of each other's image-space tests and handled by exact tests of their other features.
 //   - CGAL 5.5 Polygon_mesh_processing::self_intersections: the rules for faces that share
-//     vertices, which the oracle follows (and mayIntersect mirrors).
+//     vertices, which the oracle follows (mayIntersect applies the same code: faceContact,
+//     cullide/predicates.h).
 #include "reliable.h"
 
 #include "cullide/parallel.h"
-
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/intersections.h>
+#include "cullide/predicates.h"
 
 #include <algorithm>
 
@@ -21,12 +20,8 @@ namespace cullide::detail {
 
 namespace {
 
-using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-using P3 = K::Point_3;
-
-P3 point(std::span<const Vec3f> positions, uint32_t v) {
-    const Vec3f& p = positions[v];
-    return P3(double(p.x()), double(p.y()), double(p.z()));
+TrianglePoints points(std::span<const Vec3f> positions, const Triangle& t) {
+    return {positions[t[0]].cast<double>(), positions[t[1]].cast<double>(), positions[t[2]].cast<double>()};
 }
 
 struct Box {
@@ -102,35 +97,9 @@ std::vector<uint32_t> distanceTwoColouring(const UnitGraph& g) {
 }
 
 bool mayIntersect(std::span<const Vec3f> positions, const Triangle& a, const Triangle& b) {
-    const P3 pa[3] = {point(positions, a[0]), point(positions, a[1]), point(positions, a[2])};
-    const P3 pb[3] = {point(positions, b[0]), point(positions, b[1]), point(positions, b[2])};
-    if (CGAL::collinear(pa[0], pa[1], pa[2]) || CGAL::collinear(pb[0], pb[1], pb[2])) return false;
-    // Shared corners (by index): ia[k] is the index in b of a's corner k, or -1.
-    int ia[3], shared = 0;
-    for (int k = 0; k < 3; ++k) {
-        ia[k] = -1;
-        for (int m = 0; m < 3; ++m)
-            if (a[k] == b[m]) ia[k] = m;
-        shared += ia[k] >= 0;
-    }
-    if (shared >= 3) return true;  // a duplicated face
-    if (shared == 2) {
-        int c = 0;  // a's corner off the shared edge
-        while (ia[c] >= 0) ++c;
-        const int e0 = (c + 1) % 3, e1 = (c + 2) % 3;
-        const int d = 3 - ia[e0] - ia[e1];  // b's corner off the shared edge
-        if (CGAL::orientation(pa[e0], pa[e1], pa[c], pb[d]) != CGAL::COPLANAR) return false;
-        return CGAL::coplanar_orientation(pa[e0], pa[e1], pa[c], pb[d]) != CGAL::NEGATIVE;  // a fold-over
-    }
-    const K::Triangle_3 ta(pa[0], pa[1], pa[2]), tb(pb[0], pb[1], pb[2]);
-    if (shared == 1) {
-        int sa = 0, sb = 0;
-        while (ia[sa] < 0) ++sa;
-        sb = ia[sa];
-        const K::Segment_3 oppA(pa[(sa + 1) % 3], pa[(sa + 2) % 3]), oppB(pb[(sb + 1) % 3], pb[(sb + 2) % 3]);
-        return CGAL::do_intersect(ta, oppB) || CGAL::do_intersect(tb, oppA);
-    }
-    return CGAL::do_intersect(ta, tb);
+    const TrianglePoints pa = points(positions, a), pb = points(positions, b);
+    if (collinear(pa[0], pa[1], pa[2]) || collinear(pb[0], pb[1], pb[2])) return false;  // in no pair
+    return faceContact(pa, a, pb, b, true) != Contact::None;
 }
 
 std::vector<uint8_t> exactHits(std::span<const Vec3f> positions, std::span<const Triangle> triangles,

@@ -29,10 +29,11 @@ UnitGraph unitAdjacency(std::span<const Triangle> triangles, std::span<const Tri
 std::vector<uint32_t> distanceTwoColouring(const UnitGraph& g);
 
 // Whether two triangles may intersect under the oracle's rules (cullide/oracle/oracle.h), decided
-// exactly (CGAL's Epick predicates): false only when the oracle would report no intersecting pair.
-// Sharing is by vertex index: 3 shared: true; 2 shared: coplanar with the opposite corners not on
-// opposite sides of the edge; 1 shared: either meets the other's opposite edge; 0 shared: the
-// plain test. A degenerate (collinear) triangle is in no pair: false.
+// exactly by the oracle's own rules (faceContact, cullide/predicates.h): false only when the
+// oracle would report no intersecting pair. Sharing is by vertex index: 3 shared: true; 2 shared:
+// coplanar with the opposite corners strictly on one side of the edge; 1 shared: either meets the
+// other's opposite edge; 0 shared: the plain test. A degenerate (collinear) triangle is in no
+// pair: false.
 bool mayIntersect(std::span<const Vec3f> positions, const Triangle& a, const Triangle& b);
 
 // Per unit: whether some pair inside the unit, or between it and an adjacent unit, may intersect

@@ -6,6 +6,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/version_macros.h>
 
 #include <algorithm>
 #include <iterator>
@@ -70,5 +71,7 @@ std::vector<FacePair> selfPairsOf(const Truth& truth, uint32_t object) {
     std::sort(out.begin(), out.end());
     return out;
 }
+
+const char* cgalVersion() { return CGAL_VERSION_STR; }
 
 }  // namespace cullide::oracle

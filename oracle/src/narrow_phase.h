@@ -8,9 +8,8 @@
 #pragma once
 
 #include "cullide/mesh.h"
-#include "cullide/oracle/predicates.h"
+#include "cullide/predicates.h"
 
-#include <climits>
 #include <cstddef>
 #include <cstdint>
 
@@ -27,12 +26,6 @@ struct alignas(64) Prim {
                      // set bit among them), the edges below 2^30 of it; kNoUnit otherwise
 };
 static_assert(sizeof(Prim) == 128);
-
-constexpr int32_t kNoUnit = INT32_MIN;
-
-// The power of two in which all of `coordinates` are integers below 2^62 (their lowest set bit),
-// or kNoUnit when they span more than that.
-int32_t integerUnit(const float* coordinates, size_t count);
 
 // Fills n, perm, ni and unit from p (p, v, triangle set by the caller).
 void setPlane(Prim& prim);

@@ -1,11 +1,11 @@
 // The exact oracle (see oracle.h): the grid's broad phase (broad_phase_grid.cpp), then the exact
-// narrow phase (narrow_phase.h, predicates.cpp) on its candidates, per thread, merged and sorted.
+// narrow phase (narrow_phase.h) on its candidates, per thread, merged and sorted.
 #include "cullide/oracle/oracle.h"
 
 #include "broad_phase.h"
 #include "narrow_phase.h"
 #include "cullide/error.h"
-#include "cullide/oracle/predicates.h"
+#include "cullide/predicates.h"
 
 #include "cullide/parallel.h"
 

@@ -14,7 +14,7 @@ struct MeshStats {
     size_t unreferencedVertices = 0;
     Bounds bounds;                  // of the referenced vertices
     // Degenerate triangles, decided exactly (no epsilon): repeated index, two corners at the same
-    // point, or three collinear corners (CGAL's exact collinearity predicate on the float values).
+    // point, or three collinear corners (the exact predicate `collinear` of cullide/predicates.h).
     size_t degenerateTriangles = 0;
     // Connected components of triangles that share a vertex index (soups whose vertices are
     // duplicated fall apart into many components: that is what their indices say).

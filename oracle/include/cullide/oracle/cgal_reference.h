@@ -42,4 +42,7 @@ private:
 // triangles as (f, f), sorted.
 std::vector<FacePair> selfPairsOf(const Truth& truth, uint32_t object);
 
+// The CGAL version this build was compiled against ("5.5.1"), for libraryVersions (versions.h).
+const char* cgalVersion();
+
 }  // namespace cullide::oracle

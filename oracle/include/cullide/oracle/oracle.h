@@ -2,7 +2,7 @@
 //
 // References
 //   - P. Guigue, O. Devillers: Fast and robust triangle-triangle overlap test using orientation
-//     predicates. Journal of Graphics Tools 8(1), 2003 (the narrow phase; predicates.h).
+//     predicates. Journal of Graphics Tools 8(1), 2003 (the narrow phase; cullide/predicates.h).
 //   - CGAL 5.5 Polygon_mesh_processing::self_intersections (the rules for faces that share
 //     vertices, which we follow so that both can be compared pair for pair).
 //   - The broad phase: a uniform grid of float boxes, one per triangle (docs/oracle.md); Embree 3
@@ -24,7 +24,7 @@
 //     OracleOptions::weldByPosition makes bit-identical positions one vertex first (soups).
 //   - Degenerate triangles (a repeated index, or collinear/coincident corners, exactly) take part
 //     in no pair; they are listed in Truth::degenerate (CGAL reports them as (f, f)).
-//   - Classes (predicates.h): crossing when the two triangles are not coplanar and their
+//   - Classes (cullide/predicates.h): crossing when the two triangles are not coplanar and their
 //     relative interiors meet (one passes through the other); touching otherwise (they meet
 //     only on a boundary of one of them, or in the plane they share).
 //   - Threads: TBB (the grid's construction and the narrow phase run on it); limit them with

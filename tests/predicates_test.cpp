@@ -1,6 +1,7 @@
-// Tests for oracle/src/predicates.cpp: the filtered orient3d against CGAL's exact predicate, and
-// the triangle-triangle contact and its class against an exact-construction reference (Epeck).
-#include "cullide/oracle/predicates.h"
+// Tests for core/src/predicates.cpp: the filtered orient3d against CGAL's exact predicate, the
+// triangle-triangle contact and its class against an exact-construction reference (Epeck), and
+// the exact integer unit of float coordinates.
+#include "cullide/predicates.h"
 
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/intersections.h>
@@ -10,7 +11,7 @@
 #include <cmath>
 #include <random>
 
-namespace cullide::oracle {
+namespace cullide {
 namespace {
 
 using EK = CGAL::Exact_predicates_exact_constructions_kernel;
@@ -48,7 +49,7 @@ Vec3d v(double x, double y, double z) { return Vec3d(x, y, z); }
 // Trap: a float orient3d that returns a sign for points that are exactly coplanar, or zero for
 // points a few ulps off the plane. Points on the plane x + y + z = 1 (exactly, in binary) and
 // the same points nudged by one ulp; CGAL's exact predicate is the reference.
-TEST(OraclePredicates, Orient3dMatchesExactOnNearlyCoplanarPoints) {
+TEST(Predicates, Orient3dMatchesExactOnNearlyCoplanarPoints) {
     std::mt19937_64 rng(7);
     std::uniform_int_distribution<int> coord(-1 << 20, 1 << 20);
     int zeros = 0;
@@ -68,7 +69,7 @@ TEST(OraclePredicates, Orient3dMatchesExactOnNearlyCoplanarPoints) {
 }
 
 // Trap: collinearity by a tolerance; coincident points; tiny and huge magnitudes.
-TEST(OraclePredicates, CollinearIsExact) {
+TEST(Predicates, CollinearIsExact) {
     EXPECT_TRUE(collinear(v(0, 0, 0), v(1, 1, 1), v(2, 2, 2)));
     EXPECT_FALSE(collinear(v(0, 0, 0), v(1, 1, 1), v(2, 2, std::nextafter(2.0f, 3.0f))));
     EXPECT_TRUE(collinear(v(1, 2, 3), v(1, 2, 3), v(5, 6, 7)));
@@ -82,7 +83,7 @@ TEST(OraclePredicates, CollinearIsExact) {
 // sloppy classification gets wrong: triangles with corners on a 3x3x3 integer grid (so that
 // such coincidences are frequent), 20000 pairs with a fixed seed, against the exact reference.
 // Also checks symmetry and that the contact is CGAL's do_intersect.
-TEST(OraclePredicates, ContactAndClassMatchExactReferenceOnGridTriangles) {
+TEST(Predicates, ContactAndClassMatchExactReferenceOnGridTriangles) {
     std::mt19937 rng(11);
     auto tri = [&] {
         for (;;) {
@@ -108,7 +109,7 @@ TEST(OraclePredicates, ContactAndClassMatchExactReferenceOnGridTriangles) {
 }
 
 // Trap: segment-triangle through a corner, along an edge, in the plane, one ulp short.
-TEST(OraclePredicates, SegmentTriangleOnBoundaries) {
+TEST(Predicates, SegmentTriangleOnBoundaries) {
     const TrianglePoints t{v(0, 0, 0), v(4, 0, 0), v(0, 4, 0)};
     EXPECT_TRUE(triangleSegmentIntersect(t, v(0, 0, -1), v(0, 0, 1)));    // through a corner
     EXPECT_TRUE(triangleSegmentIntersect(t, v(2, 2, -1), v(2, 2, 1)));    // through the hypotenuse
@@ -121,7 +122,7 @@ TEST(OraclePredicates, SegmentTriangleOnBoundaries) {
 
 // Random triangles on the grid against CGAL's do_intersect for segments (the shared-vertex rule
 // relies on it).
-TEST(OraclePredicates, SegmentTriangleMatchesExactReferenceOnGrid) {
+TEST(Predicates, SegmentTriangleMatchesExactReferenceOnGrid) {
     std::mt19937 rng(5);
     for (int trial = 0; trial < 20000; ++trial) {
         TrianglePoints t;
@@ -136,5 +137,31 @@ TEST(OraclePredicates, SegmentTriangleMatchesExactReferenceOnGrid) {
     }
 }
 
+// Trap: an integer unit that drops bits (subnormals, mixed magnitudes, negative values) or claims
+// a span over 62 bits fits: every coordinate must come back exactly as an integer of 2^unit.
+TEST(Predicates, IntegerUnitIsExactOrRefused) {
+    const float all[] = {0.0f, -0.0f};
+    EXPECT_EQ(integerUnit(all, 2), 0);  // all zero
+    const float mixed[] = {1.5f, -0.25f, 0.0f, 0x1p40f};
+    EXPECT_EQ(integerUnit(mixed, 4), -2);
+    const float tiny[] = {0x1p-149f, -0x1p-130f};  // subnormal and normal
+    EXPECT_EQ(integerUnit(tiny, 2), -149);
+    const float wide[] = {0x1p-2f, 0x1p60f};  // 63 bits apart
+    EXPECT_EQ(integerUnit(wide, 2), kNoUnit);
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> exponent(-140, 40), bits(0, (1 << 24) - 1);
+    for (int trial = 0; trial < 2000; ++trial) {
+        float x[6];
+        const int base = exponent(rng);
+        for (float& f : x) f = std::ldexp(float(bits(rng) - (1 << 23)), base + int(rng() % 16));
+        const int32_t unit = integerUnit(x, 6);
+        ASSERT_NE(unit, kNoUnit) << "trial " << trial;  // at most 24 + 15 bits apart
+        for (float f : x) {
+            const int64_t q = toUnit(f, unitScale(unit));
+            ASSERT_EQ(std::ldexp(double(q), unit), double(f)) << "trial " << trial;
+        }
+    }
+}
+
 }  // namespace
-}  // namespace cullide::oracle
+}  // namespace cullide

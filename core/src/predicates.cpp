@@ -1,4 +1,4 @@
-// Exact predicates and the triangle-triangle narrow phase (see predicates.h).
+// Exact predicates and the rules for faces that share vertices (see cullide/predicates.h).
 //
 // References
 //   - J. R. Shewchuk, DCG 18 (1997): orient3d's static filter. With u = q - p, v = r - p,
@@ -9,24 +9,21 @@
 //     (Intersections_3/internal/Triangle_3_Triangle_3_do_intersect.h): the same case table and the
 //     same two final orientations, so that our answers are CGAL's answers.
 //
-// This file and cgal_reference.cpp are the only ones that include CGAL. It is compiled with
-// -frounding-math (CGAL's interval filters need it) and -ffp-contract=off (the error bounds
+// This file and oracle/src/cgal_reference.cpp are the only ones that include CGAL. It is compiled
+// with -frounding-math (CGAL's interval filters need it) and -ffp-contract=off (the error bounds
 // assume every product and sum is rounded on its own, never fused).
-#include "cullide/oracle/predicates.h"
-
-#include "narrow_phase.h"
+#include "cullide/predicates.h"
 
 #include "cullide/error.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/intersections.h>
 
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 
-namespace cullide::oracle {
+namespace cullide {
 namespace {
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -34,46 +31,20 @@ using Point = Kernel::Point_3;
 
 Point toPoint(const Vec3d& p) { return Point(p.x(), p.y(), p.z()); }
 
-constexpr double kEps = 0x1p-53;
-constexpr double kO3dErrBound = (7.0 + 56.0 * kEps) * kEps;
-constexpr double kO2dErrBound = (3.0 + 16.0 * kEps) * kEps;
+constexpr double kO2dErrBound = (3.0 + 16.0 * 0x1p-53) * 0x1p-53;
 
-// orient3d exactly in integers when the 12 coordinates are floats (as the oracle's always are)
-// close enough in magnitude: each coordinate is an integer times 2^emin (emin: the lowest set
-// bit among them), below 2^62 in that unit when the spread allows; the differences then need at
-// most 41 bits each for the determinant to fit a 128-bit integer (3 * 41 + 3 bits). Returns false
-// (undecided) otherwise. It decides exactly the cases the float filter cannot: nearly or exactly
-// coplanar points, which CGAL would hand to multiprecision arithmetic.
-// Exact integer coordinates for n float-valued doubles: each is an integer times 2^emin (emin:
-// the lowest set bit among them); false when one is not a float or they span over 62 bits.
+// Exact integer coordinates for n double values (n <= 12): all of them in integers of one power of
+// two (integerUnit); false when one is not a float or they span over 62 bits.
 bool toIntegers(const double* x, int n, int64_t* out) {
-    int emin = 1 << 20, emax = -(1 << 20);
-    int64_t m[12];
-    int unit[12];
+    float f[12];
     for (int i = 0; i < n; ++i) {
-        const float f = float(x[i]);
-        if (double(f) != x[i]) return false;
-        const uint32_t b = std::bit_cast<uint32_t>(f);
-        int e = int((b >> 23) & 0xff);
-        uint32_t mant = b & 0x7fffff;
-        if (e != 0) mant |= 0x800000;
-        else e = 1;  // subnormal
-        unit[i] = e - 150;  // |f| = mant * 2^unit
-        m[i] = (b >> 31) ? -int64_t(mant) : int64_t(mant);
-        if (mant == 0) continue;
-        emin = std::min(emin, unit[i] + std::countr_zero(mant));
-        emax = std::max(emax, unit[i] + 32 - std::countl_zero(mant));  // |f| < 2^emax
+        f[i] = float(x[i]);
+        if (double(f[i]) != x[i]) return false;
     }
-    if (emax - emin > 62) return false;
-    for (int i = 0; i < n; ++i) {
-        if (m[i] == 0) {
-            out[i] = 0;
-            continue;
-        }
-        // m * 2^(unit - emin): unit >= emin - 23 (m's trailing zeros), |result| < 2^62.
-        const int shift = unit[i] - emin;
-        out[i] = shift >= 0 ? m[i] << shift : m[i] >> -shift;  // exact (C++20 shifts of negatives)
-    }
+    const int32_t unit = integerUnit(f, size_t(n));
+    if (unit == kNoUnit) return false;
+    const double scale = unitScale(unit);
+    for (int i = 0; i < n; ++i) out[i] = toUnit(f[i], scale);  // |out| < 2^62
     return true;
 }
 
@@ -123,17 +94,6 @@ int orient2d(const Vec3d& p, const Vec3d& q, const Vec3d& r, int i, int j) {
     using P2 = Kernel::Point_2;
     const CGAL::Orientation o = CGAL::orientation(P2(p[i], p[j]), P2(q[i], q[j]), P2(r[i], r[j]));
     return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0;
-}
-
-// CGAL's coplanar_orientation(p, q, r, s) (coplanar points, p q r not collinear): +1 when s is on
-// r's side of the line pq, -1 on the other side, 0 on the line; its projections, in its order.
-int coplanarOrientation(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s) {
-    static constexpr int kAxes[3][2] = {{0, 1}, {1, 2}, {0, 2}};
-    for (const auto& ax : kAxes) {
-        const int o = orient2d(p, q, r, ax[0], ax[1]);
-        if (o != 0) return o * orient2d(p, q, s, ax[0], ax[1]);
-    }
-    return 0;  // p q r collinear: not called so
 }
 
 int sign(CGAL::Orientation o) { return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0; }
@@ -247,8 +207,32 @@ bool straddles(int d0, int d1, int d2) {
     return (d0 > 0 || d1 > 0 || d2 > 0) && (d0 < 0 || d1 < 0 || d2 < 0);
 }
 
-// Guigue-Devillers given the exact signs of a's corners against b's plane (da) and of b's
-// against a's (db): CGAL's do_intersect, with crossing told from touching.
+}  // namespace
+
+// CGAL's coplanar_orientation: the first axis-plane projection (in its order) in which p q r do
+// not degenerate.
+int coplanarOrientation(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s) {
+    static constexpr int kAxes[3][2] = {{0, 1}, {1, 2}, {0, 2}};
+    for (const auto& ax : kAxes) {
+        const int o = orient2d(p, q, r, ax[0], ax[1]);
+        if (o != 0) return o * orient2d(p, q, s, ax[0], ax[1]);
+    }
+    return 0;  // p q r collinear: not called so
+}
+
+bool coplanarWedgesMeet(const Vec3d& v, const Vec3d& a1, const Vec3d& a2, const Vec3d& b1, const Vec3d& b2) {
+    // A boundary ray of one wedge lies in the other (closed) wedge, decided in a projection in
+    // which (v, a1, a2) (so (v, b1, b2) too, being coplanar) does not degenerate.
+    int i = 0, j = 1;
+    coplanarFrame(TrianglePoints{v, a1, a2}, &i, &j);
+    const int oa = orient2d(v, a1, a2, i, j), ob = orient2d(v, b1, b2, i, j);
+    auto inWedge = [&](const Vec3d& p1, const Vec3d& p2, int o, const Vec3d& p) {
+        return o * orient2d(v, p1, p, i, j) >= 0 && o * orient2d(v, p, p2, i, j) >= 0;
+    };
+    return inWedge(a1, a2, oa, b1) || inWedge(a1, a2, oa, b2) || inWedge(b1, b2, ob, a1) || inWedge(b1, b2, ob, a2);
+}
+
+// Guigue-Devillers on the given signs: CGAL's do_intersect, with crossing told from touching.
 Contact triangleContactFromSigns(const TrianglePoints& a, const TrianglePoints& b, const int da[3], const int db[3]) {
     int ia[4], ib[4];
     bool coplanar = false;
@@ -274,7 +258,6 @@ Contact triangleContactFromSigns(const TrianglePoints& a, const TrianglePoints& 
     return Contact::Touching;
 }
 
-}  // namespace
 
 int orient3d(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s) {
     const double ux = q.x() - p.x(), uy = q.y() - p.y(), uz = q.z() - p.z();
@@ -284,7 +267,7 @@ int orient3d(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s) {
     const double det = ux * (m1 - m2) + uy * (m3 - m4) + uz * (m5 - m6);
     const double permanent = (std::abs(m1) + std::abs(m2)) * std::abs(ux) + (std::abs(m3) + std::abs(m4)) * std::abs(uy) +
                              (std::abs(m5) + std::abs(m6)) * std::abs(uz);
-    const double bound = kO3dErrBound * permanent;
+    const double bound = kOrient3dErrBound * permanent;
     if (det > bound) return 1;
     if (-det > bound) return -1;
     int exact = 0;
@@ -360,65 +343,6 @@ Contact faceContact(const TrianglePoints& a, const Triangle& ia, const TriangleP
     return triangleContact(a, b);
 }
 
-namespace detail {
-namespace {
-
-// 2^k as a double (-1022 <= k <= 1023).
-double pow2(int k) { return std::bit_cast<double>(uint64_t(1023 + k) << 52); }
-
-// x (a float) in integers of 2^unit: exact (a power-of-two scaling, an integer below 2^62).
-int64_t toUnit(float x, double scale) { return int64_t(double(x) * scale); }
-
-Vec3d corner(const Prim& p, int k) { return Vec3d(p.p[k][0], p.p[k][1], p.p[k][2]); }
-
-// Sign of orient3d(a's corners, (x, y, z)) when the float filter is sure of it, else 0. The same
-// arithmetic as orient3d (w = s - p0; det = sum w_k n_k; permanent = sum |w_k| perm_k; the error
-// bound (7 + 56 eps) eps * permanent), with the cofactor expansion along w instead of u, which
-// Shewchuk's analysis covers alike (each term one difference times a 2x2 minor of differences).
-inline int planeSide(const Prim& a, double x, double y, double z) {
-    const double wx = x - double(a.p[0][0]), wy = y - double(a.p[0][1]), wz = z - double(a.p[0][2]);
-    const double det = wx * a.n[0] + wy * a.n[1] + wz * a.n[2];
-    const double permanent = std::abs(wx) * a.perm[0] + std::abs(wy) * a.perm[1] + std::abs(wz) * a.perm[2];
-    const double bound = kO3dErrBound * permanent;
-    return det > bound ? 1 : -det > bound ? -1 : 0;
-}
-inline int planeSide(const Prim& a, const Prim& b, int k) { return planeSide(a, b.p[k][0], b.p[k][1], b.p[k][2]); }
-
-// Sign of orient3d(a's corners, b's corner k) when the filter cannot tell: a's integer normal
-// when b's corner is an integer in a's unit (|N| < 2^61, |w| < 2^63: the dot product fits 126
-// bits), then orient3d.
-[[gnu::noinline]] int exactSideSlow(const Prim& a, const Prim& b, int k) {
-    if (a.unit != kNoUnit) {
-        const double scale = pow2(-a.unit);
-        __int128 det = 0;
-        bool exact = true;
-        for (int c = 0; c < 3; ++c) {
-            // b's corner in a's unit: exact when it is an integer there, below 2^62.
-            const double y = double(b.p[k][c]) * scale;
-            if (!(std::abs(y) < 0x1p62)) {
-                exact = false;
-                break;
-            }
-            const int64_t q = int64_t(y);
-            if (double(q) != y) {
-                exact = false;
-                break;
-            }
-            det += __int128(a.ni[c]) * (q - toUnit(a.p[0][c], scale));  // |N| < 2^61, |w| < 2^63
-        }
-        if (exact) return det > 0 ? 1 : det < 0 ? -1 : 0;
-    }
-    return orient3d(corner(a, 0), corner(a, 1), corner(a, 2), corner(b, k));
-}
-
-// Sign of orient3d(a's corners, b's corner k), exactly: the filter, then exactSideSlow.
-inline int exactSide(const Prim& a, const Prim& b, int k) {
-    const int d = planeSide(a, b, k);
-    return d != 0 ? d : exactSideSlow(a, b, k);
-}
-
-}  // namespace
-
 int32_t integerUnit(const float* x, size_t count) {
     int emin = 1 << 20, emax = -(1 << 20);
     for (size_t i = 0; i < count; ++i) {
@@ -426,8 +350,9 @@ int32_t integerUnit(const float* x, size_t count) {
         int e = int((b >> 23) & 0xff);
         uint32_t mant = b & 0x7fffff;
         if (e != 0) mant |= 0x800000;
-        else e = 1;
+        else e = 1;  // subnormal
         if (mant == 0) continue;
+        // |x| = mant * 2^(e - 150): its lowest set bit, and 2^emax above |x|.
         emin = std::min(emin, e - 150 + std::countr_zero(mant));
         emax = std::max(emax, e - 150 + 32 - std::countl_zero(mant));
     }
@@ -435,117 +360,4 @@ int32_t integerUnit(const float* x, size_t count) {
     return emax - emin > 62 ? kNoUnit : emin;
 }
 
-void setPlane(Prim& prim) {
-    const double ux = double(prim.p[1][0]) - double(prim.p[0][0]), uy = double(prim.p[1][1]) - double(prim.p[0][1]),
-                 uz = double(prim.p[1][2]) - double(prim.p[0][2]);
-    const double vx = double(prim.p[2][0]) - double(prim.p[0][0]), vy = double(prim.p[2][1]) - double(prim.p[0][1]),
-                 vz = double(prim.p[2][2]) - double(prim.p[0][2]);
-    const double m1 = uy * vz, m2 = uz * vy, m3 = uz * vx, m4 = ux * vz, m5 = ux * vy, m6 = uy * vx;
-    prim.n[0] = m1 - m2, prim.n[1] = m3 - m4, prim.n[2] = m5 - m6;
-    prim.perm[0] = std::abs(m1) + std::abs(m2);
-    prim.perm[1] = std::abs(m3) + std::abs(m4);
-    prim.perm[2] = std::abs(m5) + std::abs(m6);
-    prim.unit = kNoUnit;
-    prim.ni[0] = prim.ni[1] = prim.ni[2] = 0;
-    const int32_t unit = integerUnit(&prim.p[0][0], 9);
-    if (unit == kNoUnit) return;
-    const double scale = pow2(-unit);
-    int64_t u[3], v[3];
-    constexpr int64_t kLimit = int64_t(1) << 30;
-    for (int k = 0; k < 3; ++k) {
-        const int64_t c0 = toUnit(prim.p[0][k], scale);
-        u[k] = toUnit(prim.p[1][k], scale) - c0;
-        v[k] = toUnit(prim.p[2][k], scale) - c0;
-        if (u[k] >= kLimit || u[k] <= -kLimit || v[k] >= kLimit || v[k] <= -kLimit) return;
-    }
-    // |components| < 2^61.
-    prim.ni[0] = u[1] * v[2] - u[2] * v[1];
-    prim.ni[1] = u[2] * v[0] - u[0] * v[2];
-    prim.ni[2] = u[0] * v[1] - u[1] * v[0];
-    prim.unit = unit;
-}
-
-Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
-    // Shared vertex ids, without branches (which neighbour shares what is unpredictable): bit
-    // 3i + j when a's corner i is b's corner j. The corners of a kept triangle are distinct ids,
-    // so each bit is a different corner on both sides.
-    int shared = 0, sa[3] = {0, 0, 0}, sb[3] = {0, 0, 0};
-    if (sameMesh) {
-        uint32_t mask = 0;
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) mask |= uint32_t(a.v[i] == b.v[j]) << (3 * i + j);
-        for (; mask != 0 && shared < 3; mask &= mask - 1, ++shared) {
-            const int bit = std::countr_zero(mask);
-            sa[shared] = bit / 3, sb[shared] = bit % 3;
-        }
-    }
-    if (shared == 2) {
-        // Not a fold-over unless b's opposite corner is on a's plane (faceContact's first test);
-        // then the two opposite corners strictly on one side of the edge (its second).
-        if (exactSide(a, b, 3 - sb[0] - sb[1]) != 0) return Contact::None;
-        const Vec3d e0 = corner(a, sa[0]), e1 = corner(a, sa[1]);
-        return coplanarOrientation(e0, e1, corner(a, 3 - sa[0] - sa[1]), corner(b, 3 - sb[0] - sb[1])) > 0
-                   ? Contact::Touching
-                   : Contact::None;
-    } else if (shared == 1) {
-        // b's opposite edge strictly on one side of a's plane: b meets a's plane only at the
-        // shared vertex, which is on neither opposite edge: no contact elsewhere (and the same
-        // with the roles swapped). Exact signs: nearly coplanar neighbours (subdivided flat
-        // faces, rounded midpoints) are decided here too, not in faceContact.
-        const int b1 = (sb[0] + 1) % 3, b2 = (sb[0] + 2) % 3, a1 = (sa[0] + 1) % 3, a2 = (sa[0] + 2) % 3;
-        const int s1 = exactSide(a, b, b1), s2 = exactSide(a, b, b2);
-        if (s1 == s2 && s1 != 0) return Contact::None;
-        const int t1 = exactSide(b, a, a1), t2 = exactSide(b, a, a2);
-        if (t1 == t2 && t1 != 0) return Contact::None;
-        // Coplanar (b's other corners exactly on a's plane, hence all six points): they meet
-        // besides the shared vertex v iff their closed wedges at v share more than v, i.e. a
-        // boundary ray of one lies in the other. The same answer as the opposite-edge rule (if
-        // the wedges overlap in a cone C, either the opposite edges cross in C or the nearer one
-        // lies in the other triangle), decided with a few exact 2D orientations.
-        if (s1 == 0 && s2 == 0) {
-            const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)};
-            const Vec3d& v = pa[sa[0]];
-            const Vec3d &pa1 = pa[a1], &pa2 = pa[a2];
-            const Vec3d pb1 = corner(b, b1), pb2 = corner(b, b2);
-            int i = 0, j = 1;
-            coplanarFrame(pa, &i, &j);  // a (so b too, being coplanar) projects non-degenerately
-            const int oa = orient2d(v, pa1, pa2, i, j), ob = orient2d(v, pb1, pb2, i, j);
-            auto inWedge = [&](const Vec3d& p1, const Vec3d& p2, int o, const Vec3d& p) {
-                return o * orient2d(v, p1, p, i, j) >= 0 && o * orient2d(v, p, p2, i, j) >= 0;
-            };
-            const bool meet = inWedge(pa1, pa2, oa, pb1) || inWedge(pa1, pa2, oa, pb2) || inWedge(pb1, pb2, ob, pa1) ||
-                              inWedge(pb1, pb2, ob, pa2);
-            return meet ? Contact::Touching : Contact::None;
-        }
-        // Not coplanar: b meets a's plane in a segment [v, p], p on b's opposite edge, and a
-        // meets b's plane in [v, q], q on a's; both lie on the planes' common line, so the
-        // triangles meet beyond v (CGAL's rule: the nearer of p and q is on the other triangle)
-        // iff p is on q's side of v, i.e. in a's closed wedge at v. With a's corners v, a1, a2
-        // in cyclic order and n their normal, the side of p against the line from v to a2 is
-        // sign(orient3d(v, a2, b1, b2)) * sign(s2 - s1) (the segment b1 b2 crosses the plane
-        // going the way of s2 - s1); a1's side is negative. When q = a2 (t2 = 0) that line is
-        // the common line itself: use the line to a1 instead, on whose positive side a2 lies.
-        const Vec3d v = corner(a, sa[0]), pb1 = corner(b, b1), pb2 = corner(b, b2);
-        const int crossingWay = s2 > s1 ? 1 : -1;  // s1 != s2 here
-        const bool meet = t2 != 0 ? orient3d(v, corner(a, a2), pb1, pb2) * crossingWay < 0
-                                  : orient3d(v, corner(a, a1), pb1, pb2) * crossingWay > 0;
-        if (!meet) return Contact::None;
-        // They meet along [v, min(p, q)]: a penetration when each straddles the other's plane.
-        return s1 * s2 < 0 && t1 * t2 < 0 ? Contact::Crossing : Contact::Touching;
-    } else if (shared == 0) {
-        // All of b's corners strictly on one side of a's plane, or all of a's of b's: apart.
-        // Exact signs, then Guigue-Devillers on them (triangleContact without recomputing).
-        int db[3], da[3];
-        for (int k = 0; k < 3; ++k) db[k] = exactSide(a, b, k);
-        if (db[0] == db[1] && db[1] == db[2] && db[0] != 0) return Contact::None;
-        for (int k = 0; k < 3; ++k) da[k] = exactSide(b, a, k);
-        if (da[0] == da[1] && da[1] == da[2] && da[0] != 0) return Contact::None;
-        const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)}, pb{corner(b, 0), corner(b, 1), corner(b, 2)};
-        return triangleContactFromSigns(pa, pb, da, db);
-    }
-    const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)}, pb{corner(b, 0), corner(b, 1), corner(b, 2)};
-    return faceContact(pa, a.v, pb, b.v, sameMesh);
-}
-
-}  // namespace detail
-}  // namespace cullide::oracle
+}  // namespace cullide
