@@ -179,7 +179,9 @@ void addPruneCommand(CLI::App& app, Action& action) {
     sub->add_option("--method", o->method, "original (Cullide, contacts kept) | modified (self-intersections kept) | reliable (no intersecting "
                     "triangle is ever pruned; CPU backend only; docs/reliable.md)")
         ->capture_default_str();
-    sub->add_option("--resolution", o->resolution, "Viewport: N or WxH pixels (1 to 16384 per side)")->capture_default_str();
+    sub->add_option("--resolution", o->resolution,
+                    "Viewport: N or WxH pixels (1 to " + std::to_string(kMaxViewportSide) + " per side)")
+        ->capture_default_str();
     sub->add_option("--depth", o->depth, "Depth format: unorm bits 8..32 (e.g. 24, d16) or float")->capture_default_str();
     sub->add_option("--directions", o->directions,
                     "View directions: 'axes' (+x -x +y -y +z -z), a count N (spread), or a list 'x,-y,z' / '1 0 0;0 1 1'")

@@ -66,7 +66,7 @@ CullMethod parseCullMethod(const std::string& text);  // "original" | "modified"
 std::vector<Vec3d> axisDirections();
 // N directions spread over the sphere (a Fibonacci lattice, deterministic). N >= 1.
 std::vector<Vec3d> spreadDirections(uint32_t n);
-// Parses a viewport "N" (N x N) or "WxH", each side 1..16384; InputError("option --resolution").
+// Parses a viewport "N" (N x N) or "WxH", each side 1..kMaxViewportSide; InputError("option --resolution").
 std::pair<int, int> parseResolution(const std::string& text);
 
 // Parses "axes", "N" (spread), or a list "x,-y,z" / "1 0 0;0 1 1" of directions; InputError.
@@ -99,7 +99,7 @@ struct CullideOptions {
     // call when set; nothing when empty.
     std::function<void(const PassStats&, std::span<const PcsTriangle>)> onPass;
     // Throws InputError naming the option on absurd values (no directions, a zero or non-finite
-    // direction, a viewport outside 1..16384).
+    // direction, a viewport outside 1..kMaxViewportSide).
     void validate() const;
 };
 
