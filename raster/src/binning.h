@@ -93,7 +93,8 @@ void binToTileSets(size_t n, size_t tiles, const TilesOf& tilesOf, std::vector<u
 inline void binToTiles(std::span<const TileRect> rects, const TileGrid& grid, std::vector<uint32_t>& counts,
                        TileBins& out) {
     binToTileSets(
-        rects.size(), grid.count(), [&](size_t i, auto&& visit) { grid.forEach(rects[i], visit); }, counts, out);
+        rects.size(), grid.count(), [rects, grid](size_t i, auto&& visit) { grid.forEach(rects[i], visit); }, counts,
+        out);
 }
 
 // First index in [0, n) of `v` (sorted) with v[idx] >= key, searching outwards from `hint`

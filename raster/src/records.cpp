@@ -57,12 +57,12 @@ void drawnChunks(const CommandList& list, Command::Op op, RecordSet<Rec>& set) {
         for (uint32_t b = r[0]; b < r[1]; b += kSetupChunk) set.chunks.push_back({b, std::min(r[1], b + kSetupChunk)});
 }
 
-const TileRect tileRectOf(const EdgeTri& r, const TileGrid& grid) { return grid.of(r.x0, r.y0, r.x1, r.y1); }
-const TileRect tileRectOf(const ConsRec& r, const TileGrid& grid) { return grid.of(r.t.x0, r.t.y0, r.t.x1, r.t.y1); }
+TileRect tileRectOf(const EdgeTri& r, const TileGrid& grid) { return grid.of(r.x0, r.y0, r.x1, r.y1); }
+TileRect tileRectOf(const ConsRec& r, const TileGrid& grid) { return grid.of(r.t.x0, r.t.y0, r.t.x1, r.t.y1); }
 
-// Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, recs)`
-// appends triangle t's records to `recs` and returns its TriFlags (`scratch`, a Scratch per task).
-// Then compacts the records in triangle order and bins them to tiles.
+// Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, emit)`
+// calls emit(record) for each record of triangle t and returns its TriFlags (`scratch`, a Scratch
+// per task). Then compacts the records in triangle order and bins them to tiles.
 template <typename Scratch, typename Rec, typename SetupOne>
 void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const SetupOne& setupOne) {
     if (set.flags.size() < triangles) {
@@ -77,15 +77,19 @@ void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, c
     }
     parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
         Scratch scratch;
+        const TileGrid g = grid;
         for (size_t ci = r.begin(); ci != r.end(); ++ci) {
             std::vector<Rec>& recs = set.chunkRecords[ci];
             std::vector<TileRect>& tiles = set.chunkTiles[ci];
             recs.clear();
             tiles.clear();
+            auto emit = [&](const Rec& rec) {
+                recs.push_back(rec);
+                tiles.push_back(tileRectOf(rec, g));
+            };
             for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) {
                 set.begin[t] = uint32_t(recs.size());
-                set.flags[t] = setupOne(t, scratch, recs);
-                for (size_t k = set.begin[t]; k < recs.size(); ++k) tiles.push_back(tileRectOf(recs[k], grid));
+                set.flags[t] = setupOne(t, scratch, emit);
                 set.end[t] = uint32_t(recs.size());
             }
         }
@@ -124,7 +128,7 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     SetupParams params = in.params;
     params.dropEmpty = true;
     buildRecords<SubTriangles>(
-        out, in.triangles.size(), in.grid, [&](uint32_t t, SubTriangles& scratch, std::vector<EdgeTri>& recs) {
+        out, in.triangles.size(), in.grid, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
             SnappedTri* sub = scratch.sub;
             const Triangle& tri = in.triangles[t];
             int n = 0;
@@ -143,7 +147,7 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
             }
             for (int s = 0; s < n; ++s) {
                 EdgeTri e;
-                if (makeEdgeTri(sub[s], params, e)) recs.push_back(e);
+                if (makeEdgeTri(sub[s], params, e)) emit(e);
             }
             return flags;
         });
@@ -153,14 +157,14 @@ void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const
                             RecordSet<ConsRec>& out) {
     drawnChunks(list, Command::Op::DrawConservative, out);
     buildRecords<NoScratch>(out, in.triangles.size(), in.grid,
-                            [&](uint32_t t, NoScratch&, std::vector<ConsRec>& recs) -> uint8_t {
+                            [&](uint32_t t, NoScratch&, auto&& emit) -> uint8_t {
                                 const Triangle& tri = in.triangles[t];
                                 ConsRec rec;
                                 if (!setupConservative(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]],
                                                        in.params, err, rec.t))
                                     return kRejected;
                                 rec.e = consEdges(rec.t, in.params.subpixelBits);
-                                recs.push_back(rec);
+                                emit(rec);
                                 return 0;
                             });
 }
