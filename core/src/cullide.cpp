@@ -60,8 +60,8 @@ void CullideOptions::validate() const {
     if (directions.empty()) throw InputError("option --directions", "no directions given");
     for (const Vec3d& d : directions)
         if (!d.allFinite() || d.norm() == 0) throw InputError("option --directions", "a direction is zero or not finite");
-    if (width < 1 || width > 16384 || height < 1 || height > 16384)
-        throw InputError("option --resolution", "the viewport must be 1 to 16384 pixels per side, not " +
+    if (width < 1 || width > kMaxViewportSide || height < 1 || height > kMaxViewportSide)
+        throw InputError("option --resolution", "the viewport must be 1 to " + std::to_string(kMaxViewportSide) + " pixels per side, not " +
                                                     std::to_string(width) + "x" + std::to_string(height));
     if (hierarchy.leafSize < 1) throw InputError("option --leaf-size", "the leaf size must be at least 1");
     if (hierarchy.branching < 2) throw InputError("option --branching", "the branching must be at least 2");

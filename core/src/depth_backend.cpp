@@ -113,9 +113,9 @@ void OrthoView::validate() const {
         throw InputError("view", "the view box is empty (need xmin < xmax, ymin < ymax, znear < zfar)");
     if (!std::isfinite(xmax - xmin) || !std::isfinite(ymax - ymin) || !std::isfinite(zfar - znear))
         throw InputError("view", "the view box is too large");
-    if (width < 1 || width > 16384 || height < 1 || height > 16384)
-        throw InputError("view", "the viewport must be 1..16384 pixels per side, got " + std::to_string(width) + "x" +
-                                     std::to_string(height));
+    if (width < 1 || width > kMaxViewportSide || height < 1 || height > kMaxViewportSide)
+        throw InputError("view", "the viewport must be 1.." + std::to_string(kMaxViewportSide) +
+                                     " pixels per side, got " + std::to_string(width) + "x" + std::to_string(height));
     if (depth.kind == DepthFormat::Kind::Unorm && (depth.bits < 8 || depth.bits > 32))
         throw InputError("view", "unorm depth needs 8 to 32 bits, got " + std::to_string(depth.bits));
     if (depth.kind == DepthFormat::Kind::Float32 && depth.bits != 32)

@@ -36,8 +36,8 @@ std::pair<int, int> parseResolution(const std::string& text, const std::string& 
     } else {
         throw InputError(name, "cannot read '" + text + "' (expected N or WxH, e.g. 500 or 640x480)");
     }
-    if (w < 1 || h < 1 || w > 16384 || h > 16384)
-        throw InputError(name, "'" + text + "': each side must be 1 to 16384 pixels");
+    if (w < 1 || h < 1 || w > kMaxViewportSide || h > kMaxViewportSide)
+        throw InputError(name, "'" + text + "': each side must be 1 to " + std::to_string(kMaxViewportSide) + " pixels");
     return {w, h};
 }
 

@@ -27,87 +27,80 @@ std::vector<uint64_t> executeReference(const CommandList& list, std::span<const 
                                        const DepthFormat& format, PipelineState& state, std::vector<uint32_t>& depth,
                                        RasterStats& stats, const IntervalState& intervals) {
     std::vector<uint64_t> results(list.queryCount(), 0);
-    std::vector<QueryKind> kinds(list.queryCount());
-    int64_t query = -1;
-    uint32_t nextQuery = 0;
+    StateWalker walk(state, list.queryCount());
     const int W = params.width, H = params.height, S = params.subpixelBits;
     const int64_t one = int64_t(1) << S, half = one >> 1;
+    auto passed = [&] {
+        ++stats.passed;
+        if (walk.query() >= 0) ++results[size_t(walk.query())];
+    };
+    // One conservative triangle over the whole viewport: test and/or merge intervals.
+    auto drawConservative = [&](const Command& c, const WinVertex& v0, const WinVertex& v1, const WinVertex& v2) {
+        ConsTri ct;
+        if (!setupConservative(v0, v1, v2, params, intervals.error, ct)) {
+            ++stats.rejected;
+            return;
+        }
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) {
+                if (!consCoversReference(ct, i, j, S)) continue;
+                ++stats.fragments;
+                uint32_t lo, hi;
+                consInterval(ct, i, j, format, lo, hi);
+                uint32_t& slo = (*intervals.lo)[size_t(j) * size_t(W) + size_t(i)];
+                uint32_t& shi = (*intervals.hi)[size_t(j) * size_t(W) + size_t(i)];
+                if (c.test && intervalConflicts(lo, hi, slo, shi)) passed();
+                if (c.write) {
+                    slo = std::min(slo, lo);
+                    shi = std::max(shi, hi);
+                }
+            }
+    };
+    // One triangle over the whole viewport: its sub-triangles, depth-tested in order.
     SnappedTri sub[kMaxSubTriangles];
+    auto draw = [&](const WinVertex& v0, const WinVertex& v1, const WinVertex& v2) {
+        int n = 0;
+        const uint8_t flags = setupTriangle(v0, v1, v2, params, sub, n);
+        stats.rejected += (flags & kRejected) ? 1 : 0;
+        stats.clipped += (flags & kClipped) ? 1 : 0;
+        stats.zeroArea += (flags & kZeroArea) ? 1 : 0;
+        for (int s = 0; s < n; ++s) {
+            for (int j = 0; j < H; ++j) {
+                const double row = sub[s].plane.row(j);
+                for (int i = 0; i < W; ++i) {
+                    if (!covers(sub[s], int64_t(i) * one + half, int64_t(j) * one + half, params.fillRule)) continue;
+                    ++stats.fragments;
+                    const uint32_t incoming = encodeDepth(sub[s].plane.at(row, i), format);
+                    uint32_t& stored = depth[size_t(j) * size_t(W) + size_t(i)];
+                    if (!depthTest(state.func, incoming, stored)) continue;
+                    passed();
+                    if (state.mask) stored = incoming;
+                }
+            }
+        }
+    };
     for (const Command& c : list.commands()) {
+        if (walk.apply(c)) continue;
         switch (c.op) {
             case Command::Op::Clear: std::fill(depth.begin(), depth.end(), encodeDepth(c.clearDepth, format)); break;
-            case Command::Op::SetDepthFunc: state.func = c.func; break;
-            case Command::Op::SetDepthMask: state.mask = c.mask; break;
-            case Command::Op::BeginQuery:
-                query = nextQuery++;
-                kinds[size_t(query)] = c.queryKind;
-                break;
-            case Command::Op::EndQuery: query = -1; break;
             case Command::Op::ClearIntervals:
                 std::fill(intervals.lo->begin(), intervals.lo->end(), kEmptyIntervalLo);
                 std::fill(intervals.hi->begin(), intervals.hi->end(), kEmptyIntervalHi);
                 break;
+            case Command::Op::Draw:
             case Command::Op::DrawConservative:
                 ++stats.draws;
+                stats.triangles += c.count;
                 for (uint32_t t = c.first; t < c.first + c.count; ++t) {
-                    ++stats.triangles;
                     const Triangle& tri = triangles[t];
-                    ConsTri ct;
-                    if (!setupConservative(window[tri[0]], window[tri[1]], window[tri[2]], params, intervals.error, ct)) {
-                        ++stats.rejected;
-                        continue;
-                    }
-                    for (int j = 0; j < H; ++j)
-                        for (int i = 0; i < W; ++i) {
-                            if (!consCoversReference(ct, i, j, S)) continue;
-                            ++stats.fragments;
-                            uint32_t lo, hi;
-                            consInterval(ct, i, j, format, lo, hi);
-                            uint32_t& slo = (*intervals.lo)[size_t(j) * size_t(W) + size_t(i)];
-                            uint32_t& shi = (*intervals.hi)[size_t(j) * size_t(W) + size_t(i)];
-                            if (c.test && intervalConflicts(lo, hi, slo, shi)) {
-                                ++stats.passed;
-                                if (query >= 0) ++results[size_t(query)];
-                            }
-                            if (c.write) {
-                                slo = std::min(slo, lo);
-                                shi = std::max(shi, hi);
-                            }
-                        }
+                    if (c.op == Command::Op::Draw) draw(window[tri[0]], window[tri[1]], window[tri[2]]);
+                    else drawConservative(c, window[tri[0]], window[tri[1]], window[tri[2]]);
                 }
                 break;
-            case Command::Op::Draw:
-                ++stats.draws;
-                for (uint32_t t = c.first; t < c.first + c.count; ++t) {
-                    ++stats.triangles;
-                    const Triangle& tri = triangles[t];
-                    int n = 0;
-                    const uint8_t flags = setupTriangle(window[tri[0]], window[tri[1]], window[tri[2]], params, sub, n);
-                    stats.rejected += (flags & kRejected) ? 1 : 0;
-                    stats.clipped += (flags & kClipped) ? 1 : 0;
-                    stats.zeroArea += (flags & kZeroArea) ? 1 : 0;
-                    for (int s = 0; s < n; ++s) {
-                        for (int j = 0; j < H; ++j) {
-                            const double row = sub[s].plane.row(j);
-                            for (int i = 0; i < W; ++i) {
-                                if (!covers(sub[s], int64_t(i) * one + half, int64_t(j) * one + half, params.fillRule))
-                                    continue;
-                                ++stats.fragments;
-                                const uint32_t incoming = encodeDepth(sub[s].plane.at(row, i), format);
-                                uint32_t& stored = depth[size_t(j) * size_t(W) + size_t(i)];
-                                if (!depthTest(state.func, incoming, stored)) continue;
-                                ++stats.passed;
-                                if (query >= 0) ++results[size_t(query)];
-                                if (state.mask) stored = incoming;
-                            }
-                        }
-                    }
-                }
-                break;
+            default: break;  // state commands: walk.apply
         }
     }
-    for (size_t q = 0; q < results.size(); ++q)
-        if (kinds[q] == QueryKind::AnySamplesPassed) results[q] = results[q] > 0 ? 1 : 0;
+    walk.finish(results);
     return results;
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "cullide/raster/cpu_backend.h"
+#include "command_state.h"
 #include "conservative.h"
 #include "triangle_setup.h"
 
@@ -9,12 +10,6 @@
 #include <vector>
 
 namespace cullide::raster::detail {
-
-// GL state that persists across command lists.
-struct PipelineState {
-    DepthFunc func = DepthFunc::Less;
-    bool mask = true;
-};
 
 // The conservative mode's state: the interval buffer and the view's window error bound.
 struct IntervalState {

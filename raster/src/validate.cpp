@@ -7,6 +7,7 @@
 // vertex), /work/shared/notes/gl-rules.md.
 #include "cullide/raster/validate.h"
 
+#include "command_state.h"
 #include "cullide/error.h"
 
 #include <algorithm>
@@ -110,7 +111,6 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
     const uint32_t nq = list.queryCount();
     std::vector<QueryInterval> out(nq);
     std::vector<uint64_t> ex(nq, 0);
-    std::vector<QueryKind> kinds(nq);
     const int W = view_.width, H = view_.height, S = options_.subpixelBits;
     const DepthFormat& fmt = view_.depth;
     const int64_t one = int64_t(1) << S, half = one >> 1;
@@ -128,9 +128,10 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
     const double G = guardBandPixels(S);
     auto inside = [&](const WinV& v) { return v.z >= 0 && v.z <= 1 && v.x >= -G && v.x <= G && v.y >= -G && v.y <= G; };
 
-    int64_t query = -1;
-    uint32_t next = 0;
+    detail::StateWalker walk(func_, mask_, nq);
     for (const Command& c : list.commands()) {
+        if (walk.apply(c)) continue;
+        const int64_t query = walk.query();
         switch (c.op) {
             case Command::Op::Clear: {
                 uint32_t a, b;
@@ -142,13 +143,6 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
                 exactTrusted_ = true;
                 break;
             }
-            case Command::Op::SetDepthFunc: func_ = c.func; break;
-            case Command::Op::SetDepthMask: mask_ = c.mask; break;
-            case Command::Op::BeginQuery:
-                query = next++;
-                kinds[size_t(query)] = c.queryKind;
-                break;
-            case Command::Op::EndQuery: query = -1; break;
             case Command::Op::ClearIntervals:
             case Command::Op::DrawConservative:
                 throw InputError("command list", "validation covers the GL-like commands only, not conservative ones");
@@ -272,10 +266,11 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
                     }
                 }
                 break;
+            default: break;  // state commands: walk.apply
         }
     }
     for (uint32_t q = 0; q < nq; ++q) {
-        if (kinds[q] == QueryKind::AnySamplesPassed) {
+        if (walk.anySamples(q)) {
             out[q].certain = out[q].certain > 0 ? 1 : 0;
             out[q].possible = out[q].possible > 0 ? 1 : 0;
             ex[q] = ex[q] > 0 ? 1 : 0;

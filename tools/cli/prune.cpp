@@ -135,7 +135,7 @@ void addPruneCommand(CLI::App& app, Action& action) {
                     "original (Cullide, contacts kept) | modified (self-intersections kept) | reliable (no "
                     "intersecting triangle is ever pruned; CPU backend only; docs/reliable.md)")
         ->capture_default_str();
-    sub->add_option("--resolution", o->cullide.resolution, "Viewport: N or WxH pixels (1 to 16384 per side)")
+    sub->add_option("--resolution", o->cullide.resolution, "Viewport: N or WxH pixels (1 to " + std::to_string(kMaxViewportSide) + " per side)")
         ->capture_default_str();
     sub->add_option("--depth", o->cullide.depth, "Depth format: unorm bits 8..32 (e.g. 24, d16) or float")
         ->capture_default_str();

@@ -150,7 +150,7 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("--stability", o->stability,
                     "Run a stability sweep instead: penetration | tilt | overlap | jitter (CSV to --out)");
     sub->add_option("--trials", o->trials, "Stability: trials per point")->check(CLI::Range(1, 100000));
-    sub->add_option("--resolution", o->resolution, "Stability: viewport side")->check(CLI::Range(1, 16384));
+    sub->add_option("--resolution", o->resolution, "Stability: viewport side")->check(CLI::Range(1, kMaxViewportSide));
     sub->add_option("--seed", o->seed, "Stability: random seed");
     sub->callback([o, sub, &action] {
         if (sub->get_subcommands().empty()) action = [o] { return runStudyCommand(*o); };

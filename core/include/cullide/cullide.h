@@ -95,7 +95,7 @@ struct CullideOptions {
     // call when set; nothing when empty.
     std::function<void(const PassStats&, std::span<const PcsTriangle>)> onPass;
     // Throws InputError naming the option on absurd values (no directions, a zero or non-finite
-    // direction, a viewport outside 1..16384).
+    // direction, a viewport outside 1..kMaxViewportSide).
     void validate() const;
 };
 

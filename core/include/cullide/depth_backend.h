@@ -68,6 +68,10 @@ enum class QueryKind : uint8_t {
     AnySamplesPassed,  // 1 if any fragment passed, else 0
 };
 
+// Largest viewport side, 2^14 pixels: OrthoView::validate, the option parsers and the CLI enforce
+// it, and the CPU rasterizer's fixed-point ranges rely on it (cullide/raster/rules.h).
+inline constexpr int kMaxViewportSide = 16384;
+
 // How depth is stored: unsigned normalized with n bits (8..32), k = round(z * (2^n - 1)) after
 // clamping z to [0,1]; or IEEE 32-bit float (z clamped to [0,1], stored as float).
 struct DepthFormat {
@@ -100,7 +104,7 @@ struct OrthoView {
     // aligned with dir; up = cross(dir, right)).
     static OrthoView looking(const Vec3d& direction);
     // Throws InputError("view", ...) on a non-orthonormal frame, an empty box, a viewport outside
-    // 1..16384 per side, or non-finite numbers.
+    // 1..kMaxViewportSide per side, or non-finite numbers.
     void validate() const;
 };
 

@@ -28,7 +28,7 @@ inline constexpr uint32_t kMinBranching = 2, kMaxBranching = 64;
 // CullideOptions as typed; the defaults give CullideOptions' defaults.
 struct OptionText {
     std::string method = "modified";        // original | modified | reliable
-    std::string resolution = "500";         // N or WxH, each side 1..16384
+    std::string resolution = "500";         // N or WxH, each side 1..kMaxViewportSide
     std::string depth = "24";               // unorm bits 8..32 (24, d24, unorm24) or float (float, f32, d32f)
     std::string directions = "axes";        // axes | N (spread) | a list x,-y,z or '1 0 0;0 1 1'
     std::string hierarchy = "connectivity"; // connectivity | random
@@ -51,7 +51,7 @@ struct OptionNames {
 // The whole set; throws InputError naming the first bad value (in the order of OptionText).
 CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& names = {});
 
-// A viewport "N" (N x N) or "WxH", each side 1..16384.
+// A viewport "N" (N x N) or "WxH", each side 1..kMaxViewportSide.
 std::pair<int, int> parseResolution(const std::string& text, const std::string& name = "option --resolution");
 // "axes", "N" (N spread directions, 1..10000), or a list "x,-y,z" / "1 0 0;0 1 1" of non-zero
 // directions (normalized).

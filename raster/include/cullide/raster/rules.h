@@ -118,8 +118,8 @@ inline constexpr int kDefaultSubpixelBits = 8;
 inline constexpr int kMinSubpixelBits = 1;
 inline constexpr int kMaxSubpixelBits = 12;
 
-// Largest viewport side (OrthoView::validate enforces it): 2^14 pixels.
-inline constexpr int kMaxViewportSide = 16384;
+// Largest viewport side: cullide::kMaxViewportSide (cullide/depth_backend.h, 2^14 pixels), which
+// OrthoView::validate enforces; the ranges below rely on it.
 
 // Snapped coordinates are kept within |v| <= 2^29 fixed-point units (the guard band). Then an
 // edge's coefficients are below 2^30, a pixel centre below 2^26 (2^14 px * 2^12), and every edge

@@ -1,0 +1,172 @@
+// Triangle records for the fast path of the CPU backend (records.h).
+#include "records.h"
+
+#include "cullide/error.h"
+#include "cullide/parallel.h"
+
+#include <oneapi/tbb/blocked_range.h>
+
+#include <algorithm>
+
+namespace cullide::raster::detail {
+
+namespace {
+
+constexpr uint32_t kSetupChunk = 1024;  // triangles per setup task
+
+// set.chunks: the union of the ranges of `op` commands as sorted disjoint intervals (by sorting
+// the ranges when there are few, else by a difference array over the touched triangle span), cut
+// into chunks of at most kSetupChunk triangles.
+template <typename Rec>
+void drawnChunks(const CommandList& list, Command::Op op, RecordSet<Rec>& set) {
+    set.ranges.clear();
+    uint32_t lo = UINT32_MAX, hi = 0;
+    for (const Command& c : list.commands()) {
+        if (c.op != op || c.count == 0) continue;
+        const std::array<uint32_t, 2> r{c.first, c.first + c.count};
+        if (!set.ranges.empty() && set.ranges.back() == r) continue;  // repeated draw of one object
+        set.ranges.push_back(r);
+        lo = std::min(lo, r[0]);
+        hi = std::max(hi, r[1]);
+    }
+    std::vector<std::array<uint32_t, 2>> merged;
+    if (set.ranges.size() * 16 < size_t(hi - lo) || set.ranges.size() < 64) {
+        std::sort(set.ranges.begin(), set.ranges.end());
+        for (const auto& r : set.ranges) {
+            if (!merged.empty() && r[0] <= merged.back()[1])
+                merged.back()[1] = std::max(merged.back()[1], r[1]);
+            else
+                merged.push_back(r);
+        }
+    } else {
+        set.coverDiff.assign(size_t(hi - lo) + 1, 0);
+        for (const auto& r : set.ranges) {
+            ++set.coverDiff[r[0] - lo];
+            --set.coverDiff[r[1] - lo];
+        }
+        int32_t depth = 0;
+        for (uint32_t t = lo; t < hi; ++t) {
+            const int32_t before = depth;
+            depth += set.coverDiff[t - lo];
+            if (before == 0 && depth > 0) merged.push_back({t, t});
+            if (depth > 0) merged.back()[1] = t + 1;
+        }
+    }
+    set.chunks.clear();
+    for (const auto& r : merged)
+        for (uint32_t b = r[0]; b < r[1]; b += kSetupChunk) set.chunks.push_back({b, std::min(r[1], b + kSetupChunk)});
+}
+
+TileRect tileRectOf(const EdgeTri& r, const TileGrid& grid) { return grid.of(r.x0, r.y0, r.x1, r.y1); }
+TileRect tileRectOf(const ConsRec& r, const TileGrid& grid) { return grid.of(r.t.x0, r.t.y0, r.t.x1, r.t.y1); }
+
+// Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, emit)`
+// calls emit(record) for each record of triangle t and returns its TriFlags (`scratch`, a Scratch
+// per task). Then compacts the records in triangle order and bins them to tiles.
+template <typename Scratch, typename Rec, typename SetupOne>
+void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const SetupOne& setupOne) {
+    if (set.flags.size() < triangles) {
+        set.flags.resize(triangles);
+        set.begin.resize(triangles);
+        set.end.resize(triangles);
+    }
+    const std::vector<std::array<uint32_t, 2>>& chunks = set.chunks;
+    if (set.chunkRecords.size() < chunks.size()) {
+        set.chunkRecords.resize(chunks.size());
+        set.chunkTiles.resize(chunks.size());
+    }
+    parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
+        Scratch scratch;
+        const TileGrid g = grid;
+        for (size_t ci = r.begin(); ci != r.end(); ++ci) {
+            std::vector<Rec>& recs = set.chunkRecords[ci];
+            std::vector<TileRect>& tiles = set.chunkTiles[ci];
+            recs.clear();
+            tiles.clear();
+            auto emit = [&](const Rec& rec) {
+                recs.push_back(rec);
+                tiles.push_back(tileRectOf(rec, g));
+            };
+            for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) {
+                set.begin[t] = uint32_t(recs.size());
+                set.flags[t] = setupOne(t, scratch, emit);
+                set.end[t] = uint32_t(recs.size());
+            }
+        }
+    });
+    set.chunkOffset.resize(chunks.size() + 1);
+    set.chunkOffset[0] = 0;
+    for (size_t ci = 0; ci < chunks.size(); ++ci)
+        set.chunkOffset[ci + 1] = set.chunkOffset[ci] + set.chunkRecords[ci].size();
+    const size_t total = set.chunkOffset.back();
+    CULLIDE_CHECK(total < size_t(UINT32_MAX), "too many triangle records for 32-bit indices");
+    set.records.resize(total);
+    set.tiles.resize(total);
+    parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t ci = r.begin(); ci != r.end(); ++ci) {
+            const uint32_t off = uint32_t(set.chunkOffset[ci]);
+            std::copy(set.chunkRecords[ci].begin(), set.chunkRecords[ci].end(), set.records.begin() + off);
+            std::copy(set.chunkTiles[ci].begin(), set.chunkTiles[ci].end(), set.tiles.begin() + off);
+            for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) {
+                set.begin[t] += off;
+                set.end[t] += off;
+            }
+        }
+    });
+    binToTiles(set.tiles, grid, set.counts, set.bins);
+}
+
+struct SubTriangles {
+    SnappedTri sub[kMaxSubTriangles];
+};
+struct NoScratch {};
+
+}  // namespace
+
+void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri>& out) {
+    drawnChunks(list, Command::Op::Draw, out);
+    SetupParams params = in.params;
+    params.dropEmpty = true;
+    buildRecords<SubTriangles>(
+        out, in.triangles.size(), in.grid, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
+            SnappedTri* sub = scratch.sub;
+            const Triangle& tri = in.triangles[t];
+            int n = 0;
+            uint8_t flags;
+            const WinVertex &v0 = in.window[tri[0]], &v1 = in.window[tri[1]], &v2 = in.window[tri[2]];
+            const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
+            if (s0.inside && s1.inside && s2.inside) {  // the common case: vertices snapped once
+                if (trivialReject(v0, v1, v2, params)) {
+                    flags = kRejected;
+                } else {
+                    const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
+                    flags = setupUnclipped(v0, v1, v2, sx, sy, params, sub, n);
+                }
+            } else {
+                flags = setupTriangle(v0, v1, v2, params, sub, n);
+            }
+            for (int s = 0; s < n; ++s) {
+                EdgeTri e;
+                if (makeEdgeTri(sub[s], params, e)) emit(e);
+            }
+            return flags;
+        });
+}
+
+void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const WindowError& err,
+                            RecordSet<ConsRec>& out) {
+    drawnChunks(list, Command::Op::DrawConservative, out);
+    buildRecords<NoScratch>(out, in.triangles.size(), in.grid,
+                            [&](uint32_t t, NoScratch&, auto&& emit) -> uint8_t {
+                                const Triangle& tri = in.triangles[t];
+                                ConsRec rec;
+                                if (!setupConservative(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]],
+                                                       in.params, err, rec.t))
+                                    return kRejected;
+                                rec.e = consEdges(rec.t, in.params.subpixelBits);
+                                emit(rec);
+                                return 0;
+                            });
+}
+
+}  // namespace cullide::raster::detail

@@ -1,0 +1,363 @@
+// The per-tile work of the fast path of the CPU backend (tile_kernels.h).
+#include "tile_kernels.h"
+
+#include <algorithm>
+#include <bit>
+#include <utility>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
+namespace cullide::raster::detail {
+
+namespace {
+
+constexpr size_t kPrefetch = 8;  // records fetched ahead in a tile's list
+
+// The hot loop: one record clipped to a pixel rectangle (inclusive bounds).
+// Record: also append the fragments to `rec` as groups (the caller guarantees room for one group
+// per pixel of the clipped rectangle).
+template <DepthFunc F, bool Float, bool Record>
+void rasterizeInTile(const EdgeTri& t, int bx0, int by0, int bx1, int by1, uint32_t* depth, size_t stride, bool mask,
+                     int bits, uint64_t& fragments, uint64_t& passed, FragGroup*& rec) {
+    const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
+    const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
+    if (x0 > x1 || y0 > y1) return;
+    const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2];
+    uint64_t frag = 0, pass = 0;
+    for (int j = y0; j <= y1; ++j) {
+        int64_t e0 = a0 * x0 + t.b[0] * j + t.c[0];
+        int64_t e1 = a1 * x0 + t.b[1] * j + t.c[1];
+        int64_t e2 = a2 * x0 + t.b[2] * j + t.c[2];
+        const double row = t.plane.row(j);
+        uint32_t* d = depth + size_t(j) * stride;
+        [[maybe_unused]] FragGroup* group = nullptr;  // the row's open group
+        for (int i = x0; i <= x1; ++i, e0 += a0, e1 += a1, e2 += a2) {
+            if ((e0 | e1 | e2) < 0) continue;
+            ++frag;
+            const double z = clampDepth(t.plane.at(row, i));
+            const uint32_t incoming = Float ? std::bit_cast<uint32_t>(float(z)) : encodeUnorm(z, bits);
+            if constexpr (Record) {
+                const uint32_t pixel = uint32_t(size_t(j) * stride + size_t(i));
+                if (group == nullptr || pixel - group->pixel >= 4) {
+                    group = rec++;
+                    group->pixel = pixel;
+                    group->lanes = 0;
+                }
+                group->lanes |= 1u << (pixel - group->pixel);
+                group->z[pixel - group->pixel] = incoming;
+            }
+            const uint32_t stored = d[i];
+            const bool ok = depthTest(F, incoming, stored);  // branch-free below: outcomes are noisy
+            pass += ok;
+            d[i] = ok && mask ? incoming : stored;
+        }
+    }
+    fragments += frag;
+    passed += pass;
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define CULLIDE_RASTER_AVX2 1
+// The same loop four pixels at a time with AVX2 (selected at run time where the CPU has it):
+// the same integer edge functions, the same double operations in the same order (no FMA: the
+// target does not enable it), so the same fragments, depths and results bit for bit. The lanes
+// past the record's right end or outside it are masked off; masked loads and stores touch no
+// other pixel (the neighbouring tile belongs to another thread).
+alignas(16) constexpr int32_t kLaneMasks[16][4] = {
+    {0, 0, 0, 0},   {-1, 0, 0, 0},   {0, -1, 0, 0},   {-1, -1, 0, 0},   {0, 0, -1, 0},   {-1, 0, -1, 0},
+    {0, -1, -1, 0}, {-1, -1, -1, 0}, {0, 0, 0, -1},   {-1, 0, 0, -1},   {0, -1, 0, -1},  {-1, -1, 0, -1},
+    {0, 0, -1, -1}, {-1, 0, -1, -1}, {0, -1, -1, -1}, {-1, -1, -1, -1}};
+
+// The depth test of four lanes at once (unsigned comparisons through the signed ones, sign bits
+// flipped), for the lanes in `lanes`.
+template <DepthFunc F>
+__attribute__((target("avx2"))) inline __m128i depthTest4(__m128i incoming, __m128i stored, __m128i lanes) {
+    const __m128i signBit = _mm_set1_epi32(INT32_MIN);
+    const __m128i si = _mm_xor_si128(incoming, signBit), ss = _mm_xor_si128(stored, signBit);
+    const __m128i all = _mm_set1_epi32(-1);
+    __m128i ok;
+    if constexpr (F == DepthFunc::Never) ok = _mm_setzero_si128();
+    else if constexpr (F == DepthFunc::Less) ok = _mm_cmpgt_epi32(ss, si);
+    else if constexpr (F == DepthFunc::Equal) ok = _mm_cmpeq_epi32(incoming, stored);
+    else if constexpr (F == DepthFunc::LEqual) ok = _mm_xor_si128(_mm_cmpgt_epi32(si, ss), all);
+    else if constexpr (F == DepthFunc::Greater) ok = _mm_cmpgt_epi32(si, ss);
+    else if constexpr (F == DepthFunc::NotEqual) ok = _mm_xor_si128(_mm_cmpeq_epi32(incoming, stored), all);
+    else if constexpr (F == DepthFunc::GEqual) ok = _mm_xor_si128(_mm_cmpgt_epi32(ss, si), all);
+    else ok = all;
+    return _mm_and_si128(ok, lanes);
+}
+
+template <DepthFunc F, bool Float, bool Record>
+__attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int bx0, int by0, int bx1, int by1,
+                                                        uint32_t* depth, size_t stride, bool mask, int bits,
+                                                        uint64_t& fragments, uint64_t& passed, FragGroup*& rec) {
+    const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
+    const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
+    if (x0 > x1 || y0 > y1) return;
+    // Records one or two pixels wide (most, on meshes finer than the image) cost less in the
+    // scalar loop than the vector constants do.
+    if (x1 - x0 < 2)
+        return rasterizeInTile<F, Float, Record>(t, bx0, by0, bx1, by1, depth, stride, mask, bits, fragments, passed,
+                                                 rec);
+    const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2];
+    const __m256i off0 = _mm256_set_epi64x(3 * a0, 2 * a0, a0, 0), step0 = _mm256_set1_epi64x(4 * a0);
+    const __m256i off1 = _mm256_set_epi64x(3 * a1, 2 * a1, a1, 0), step1 = _mm256_set1_epi64x(4 * a1);
+    const __m256i off2 = _mm256_set_epi64x(3 * a2, 2 * a2, a2, 0), step2 = _mm256_set1_epi64x(4 * a2);
+    // Pixel centre i + l + 0.5 as double(i) + (l + 0.5): both exact, so the same value.
+    const __m256d centres = _mm256_set_pd(3.5, 2.5, 1.5, 0.5);
+    const __m256d planeX0 = _mm256_set1_pd(t.plane.x0), dzdx = _mm256_set1_pd(t.plane.dzdx);
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
+    const __m256d scale = _mm256_set1_pd(double(uint64_t(1) << bits)), magic = _mm256_set1_pd(0x1p52);
+    const __m256i low32 = _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0);
+    uint64_t frag = 0, pass = 0;
+    for (int j = y0; j <= y1; ++j) {
+        __m256i e0 = _mm256_add_epi64(_mm256_set1_epi64x(a0 * x0 + t.b[0] * j + t.c[0]), off0);
+        __m256i e1 = _mm256_add_epi64(_mm256_set1_epi64x(a1 * x0 + t.b[1] * j + t.c[1]), off1);
+        __m256i e2 = _mm256_add_epi64(_mm256_set1_epi64x(a2 * x0 + t.b[2] * j + t.c[2]), off2);
+        const __m256d row = _mm256_set1_pd(t.plane.row(j));
+        uint32_t* d = depth + size_t(j) * stride;
+        for (int i = x0; i <= x1; i += 4, e0 = _mm256_add_epi64(e0, step0), e1 = _mm256_add_epi64(e1, step1),
+                 e2 = _mm256_add_epi64(e2, step2)) {
+            const int outside = _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_or_si256(e0, _mm256_or_si256(e1, e2))));
+            const int valid = x1 - i >= 3 ? 15 : (1 << (x1 - i + 1)) - 1;
+            const int inside = ~outside & valid;
+            if (inside == 0) continue;
+            // clampDepth and the encoding of rules.h, lane by lane.
+            __m256d z = _mm256_add_pd(row, _mm256_mul_pd(dzdx, _mm256_sub_pd(_mm256_add_pd(_mm256_set1_pd(double(i)), centres), planeX0)));
+            z = _mm256_and_pd(z, _mm256_cmp_pd(z, zero, _CMP_GT_OQ));  // !(z > 0): +0 (NaN too)
+            z = _mm256_blendv_pd(z, one, _mm256_cmp_pd(z, one, _CMP_GT_OQ));
+            __m128i incoming;
+            if constexpr (Float) {
+                incoming = _mm_castps_si128(_mm256_cvtpd_ps(z));  // round to nearest, as float(z)
+            } else {
+                const __m256d a = _mm256_mul_pd(z, scale);
+                const __m256d f = _mm256_round_pd(a, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+                const __m256d r = _mm256_sub_pd(a, f);
+                const __m256d up = _mm256_and_pd(_mm256_cmp_pd(r, half, _CMP_GE_OQ),
+                                                 _mm256_cmp_pd(_mm256_sub_pd(r, half), z, _CMP_GE_OQ));
+                const __m256d down = _mm256_and_pd(_mm256_cmp_pd(r, half, _CMP_LT_OQ),
+                                                   _mm256_cmp_pd(_mm256_add_pd(r, half), z, _CMP_LT_OQ));
+                const __m256d code = _mm256_sub_pd(_mm256_add_pd(f, _mm256_and_pd(up, one)), _mm256_and_pd(down, one));
+                // An integer below 2^32 plus 2^52 holds it in its low 32 bits.
+                incoming = _mm256_castsi256_si128(
+                    _mm256_permutevar8x32_epi32(_mm256_castpd_si256(_mm256_add_pd(code, magic)), low32));
+            }
+            if constexpr (Record) {
+                FragGroup* g = rec++;
+                g->pixel = uint32_t(size_t(j) * stride + size_t(i));
+                g->lanes = uint32_t(inside);
+                _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), incoming);
+            }
+            const __m128i lanes = _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[inside]));
+            const __m128i stored = _mm_maskload_epi32(reinterpret_cast<const int*>(d + i), lanes);
+            const __m128i ok = depthTest4<F>(incoming, stored, lanes);
+            const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
+            frag += uint64_t(std::popcount(unsigned(inside)));
+            pass += uint64_t(std::popcount(unsigned(okBits)));
+            if (mask && okBits != 0) _mm_maskstore_epi32(reinterpret_cast<int*>(d + i), ok, incoming);
+        }
+    }
+    fragments += frag;
+    passed += pass;
+}
+#endif
+
+// A draw replayed from its recorded fragments: the same tests, counts and writes, in the same order.
+template <DepthFunc F>
+void replayFragments(const FragGroup* g, const FragGroup* end, uint32_t* depth, bool mask, uint64_t& fragments,
+                     uint64_t& passed) {
+    uint64_t frag = 0, pass = 0;
+    for (; g != end; ++g)
+        for (uint32_t l = 0; l < 4; ++l) {
+            if (!(g->lanes >> l & 1)) continue;
+            ++frag;
+            const uint32_t incoming = g->z[l], stored = depth[g->pixel + l];
+            const bool ok = depthTest(F, incoming, stored);
+            pass += ok;
+            depth[g->pixel + l] = ok && mask ? incoming : stored;
+        }
+    fragments += frag;
+    passed += pass;
+}
+
+#ifdef CULLIDE_RASTER_AVX2
+template <DepthFunc F>
+__attribute__((target("avx2"))) void replayFragmentsAvx2(const FragGroup* g, const FragGroup* end, uint32_t* depth,
+                                                        bool mask, uint64_t& fragments, uint64_t& passed) {
+    uint64_t frag = 0, pass = 0;
+    for (; g != end; ++g) {
+        const __m128i lanes = _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[g->lanes]));
+        const __m128i incoming = _mm_loadu_si128(reinterpret_cast<const __m128i*>(g->z));
+        int* d = reinterpret_cast<int*>(depth + g->pixel);
+        const __m128i ok = depthTest4<F>(incoming, _mm_maskload_epi32(d, lanes), lanes);
+        const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
+        frag += uint64_t(std::popcount(g->lanes));
+        pass += uint64_t(std::popcount(unsigned(okBits)));
+        if (mask && okBits != 0) _mm_maskstore_epi32(d, ok, incoming);
+    }
+    fragments += frag;
+    passed += pass;
+}
+#endif
+
+// One conservative record clipped to a pixel rectangle: test and/or merge intervals.
+void rasterizeConservative(const ConsRec& r, int bx0, int by0, int bx1, int by1, uint32_t* ilo, uint32_t* ihi,
+                           size_t stride, bool test, bool write, const DepthFormat& format, uint64_t& fragments,
+                           uint64_t& passed) {
+    const ConsTri& t = r.t;
+    const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
+    const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
+    if (x0 > x1 || y0 > y1) return;
+    const int64_t a0 = r.e.a[0], a1 = r.e.a[1], a2 = r.e.a[2];
+    uint64_t frag = 0, pass = 0;
+    for (int j = y0; j <= y1; ++j) {
+        int64_t e0 = a0 * x0 + r.e.b[0] * j + r.e.c[0];
+        int64_t e1 = a1 * x0 + r.e.b[1] * j + r.e.c[1];
+        int64_t e2 = a2 * x0 + r.e.b[2] * j + r.e.c[2];
+        const size_t row = size_t(j) * stride;
+        for (int i = x0; i <= x1; ++i, e0 += a0, e1 += a1, e2 += a2) {
+            if ((e0 | e1 | e2) < 0) continue;
+            ++frag;
+            uint32_t lo, hi;
+            consInterval(t, i, j, format, lo, hi);
+            uint32_t& slo = ilo[row + size_t(i)];
+            uint32_t& shi = ihi[row + size_t(i)];
+            if (test) pass += intervalConflicts(lo, hi, slo, shi) ? 1 : 0;
+            if (write) {
+                slo = std::min(slo, lo);
+                shi = std::max(shi, hi);
+            }
+        }
+    }
+    fragments += frag;
+    passed += pass;
+}
+
+template <template <DepthFunc, bool, bool> class K, bool Float, size_t... F>
+constexpr RasterTable makeTable(std::index_sequence<F...>) {
+    return {std::array<RasterFn, 8>{K<DepthFunc(F), Float, false>::run...},
+            std::array<RasterFn, 8>{K<DepthFunc(F), Float, true>::run...},
+            std::array<ReplayFn, 8>{K<DepthFunc(F), Float, false>::replay...}};
+}
+
+template <DepthFunc F, bool Float, bool Record>
+struct ScalarKernel {
+    static constexpr RasterFn run = &rasterizeInTile<F, Float, Record>;
+    static constexpr ReplayFn replay = &replayFragments<F>;
+};
+
+#ifdef CULLIDE_RASTER_AVX2
+template <DepthFunc F, bool Float, bool Record>
+struct Avx2Kernel {
+    static constexpr RasterFn run = &rasterizeInTileAvx2<F, Float, Record>;
+    static constexpr ReplayFn replay = &replayFragmentsAvx2<F>;
+};
+#endif
+
+}  // namespace
+
+// The hot loops for this CPU: AVX2 when asked for and present, else the scalar loops.
+RasterTable pickRasterTable(bool isFloat, bool simd) {
+    constexpr auto funcs = std::make_index_sequence<8>();
+#ifdef CULLIDE_RASTER_AVX2
+    if (simd && __builtin_cpu_supports("avx2"))
+        return isFloat ? makeTable<Avx2Kernel, true>(funcs) : makeTable<Avx2Kernel, false>(funcs);
+#endif
+    (void)simd;
+    return isFloat ? makeTable<ScalarKernel, true>(funcs) : makeTable<ScalarKernel, false>(funcs);
+}
+
+namespace {
+
+// A draw's samples that passed, added to its query's count (the tile's list stays in query order).
+void countQuery(TileOut& out, int32_t query, uint64_t n) {
+    if (query < 0 || n == 0) return;
+    if (!out.queries.empty() && out.queries.back().query == uint32_t(query))
+        out.queries.back().count += n;
+    else
+        out.queries.push_back({uint32_t(query), n});
+}
+
+}  // namespace
+
+void runTile(const TileJob& job, size_t tile, FragCache& cache, TileOut& out) {
+    out.queries.clear();
+    out.fragments = out.passed = 0;
+    const int ts = job.grid.tileSize, W = job.width, H = job.height, bits = job.format.bits;
+    const int bx0 = int(tile % size_t(job.grid.tilesX)) * ts, by0 = int(tile / size_t(job.grid.tilesX)) * ts;
+    const int bx1 = std::min(bx0 + ts, W) - 1, by1 = std::min(by0 + ts, H) - 1;
+    const RasterTable& table = job.table;
+    uint32_t* const depth = job.depth;
+    const EdgeTri* const records = job.plain.records.data();
+    const uint32_t* recs = job.plain.bins.begin(tile);
+    const size_t nrecs = job.plain.bins.size(tile);
+    const std::vector<Event>& events = job.events.events;
+    const TileBins& eventBins = job.events.bins;
+    size_t hint = 0, consHint = 0;
+    cache.reset(eventBins.size(tile));
+    for (uint32_t k = eventBins.start[tile]; k < eventBins.start[tile + 1]; ++k) {
+        const Event& e = events[eventBins.items[k]];
+        if (e.clear) {
+            for (int j = by0; j <= by1; ++j)
+                std::fill_n(depth + size_t(j) * size_t(W) + size_t(bx0), bx1 - bx0 + 1, e.clearValue);
+            continue;
+        }
+        if (e.intervalClear) {
+            for (int j = by0; j <= by1; ++j) {
+                std::fill_n(job.ilo + size_t(j) * size_t(W) + size_t(bx0), bx1 - bx0 + 1, kEmptyIntervalLo);
+                std::fill_n(job.ihi + size_t(j) * size_t(W) + size_t(bx0), bx1 - bx0 + 1, kEmptyIntervalHi);
+            }
+            continue;
+        }
+        const uint64_t before = out.passed;
+        if (e.conservative) {
+            const uint32_t* crecs = job.conservative.bins.begin(tile);
+            const size_t ncrecs = job.conservative.bins.size(tile);
+            size_t p = gallopLowerBound(crecs, ncrecs, consHint, e.recBegin);
+            for (; p < ncrecs && crecs[p] < e.recEnd; ++p)
+                rasterizeConservative(job.conservative.records[crecs[p]], bx0, by0, bx1, by1, job.ilo, job.ihi,
+                                      size_t(W), e.test, e.write, job.format, out.fragments, out.passed);
+            consHint = p;
+            countQuery(out, e.query, out.passed - before);
+            continue;
+        }
+        FragCache::Entry& seen = cache.find(e.recBegin, e.recEnd);
+        if (seen.recBegin == e.recBegin && seen.recEnd == e.recEnd) {
+            table.replay[size_t(e.func)](cache.groups.data() + seen.start, cache.groups.data() + seen.stop, depth,
+                                         e.mask, out.fragments, out.passed);
+        } else {
+            // Rasterize and record, while the groups fit.
+            FragGroup* const groups = cache.groups.data();
+            FragGroup* w = groups + cache.used;
+            bool record = true;
+            size_t p = gallopLowerBound(recs, nrecs, hint, e.recBegin);
+            for (; p < nrecs && recs[p] < e.recEnd; ++p) {
+                // A tile's records are scattered through the records: fetch ahead (no effect on
+                // results).
+                if (p + kPrefetch < nrecs) {
+                    const char* ahead = reinterpret_cast<const char*>(&records[recs[p + kPrefetch]]);
+                    __builtin_prefetch(ahead);
+                    __builtin_prefetch(ahead + 64);
+                }
+                const EdgeTri& tri = records[recs[p]];
+                if (record) {  // room for one group per pixel of the clipped rectangle
+                    const int64_t cw = std::min<int>(tri.x1, bx1) - std::max<int>(tri.x0, bx0) + 1;
+                    const int64_t ch = std::min<int>(tri.y1, by1) - std::max<int>(tri.y0, by0) + 1;
+                    record = cw <= 0 || ch <= 0 || int64_t(groups + kFragCap - w) >= cw * ch;
+                }
+                (record ? table.record : table.raster)[size_t(e.func)](tri, bx0, by0, bx1, by1, depth, size_t(W),
+                                                                       e.mask, bits, out.fragments, out.passed, w);
+            }
+            hint = p;
+            if (record) {
+                seen = {e.recBegin, e.recEnd, uint32_t(cache.used), uint32_t(w - groups)};
+                cache.used = size_t(w - groups);
+            }
+        }
+        countQuery(out, e.query, out.passed - before);
+    }
+}
+
+}  // namespace cullide::raster::detail

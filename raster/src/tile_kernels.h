@@ -1,0 +1,63 @@
+// The per-tile work of the fast path of the CPU backend (cpu_backend.cpp, step 6): the pixel
+// loops (scalar and AVX2, chosen at run time; the conservative loop) and the walk of one tile's
+// events. Private to raster/.
+#pragma once
+
+#include "binning.h"
+#include "frag_cache.h"
+#include "records.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace cullide::raster::detail {
+
+using RasterFn = void (*)(const EdgeTri&, int, int, int, int, uint32_t*, size_t, bool, int, uint64_t&, uint64_t&,
+                          FragGroup*&);
+using ReplayFn = void (*)(const FragGroup*, const FragGroup*, uint32_t*, bool, uint64_t&, uint64_t&);
+
+// The pixel loops for one CPU and depth format, indexed by DepthFunc: rasterizing (raster),
+// rasterizing and recording (record), replaying (replay).
+struct RasterTable {
+    std::array<RasterFn, 8> raster, record;
+    std::array<ReplayFn, 8> replay;
+};
+
+// The hot loops for this CPU: AVX2 when asked for and present, else the scalar loops.
+RasterTable pickRasterTable(bool isFloat, bool simd);
+
+struct QueryCount {
+    uint32_t query;
+    uint64_t count;
+};
+
+// Per-tile results, padded against false sharing.
+struct alignas(64) TileOut {
+    std::vector<QueryCount> queries;  // sparse, in query order
+    uint64_t fragments = 0, passed = 0;
+};
+
+// What the tiles read and write.
+struct TileJob {
+    const EventList& events;
+    const RecordSet<EdgeTri>& plain;
+    const RecordSet<ConsRec>& conservative;
+    const RasterTable& table;
+    const DepthFormat& format;
+    int width, height;
+    TileGrid grid;
+    uint32_t* depth;     // width x height
+    uint32_t* ilo;       // the interval buffer (conservative lists only)
+    uint32_t* ihi;
+};
+
+// Runs tile `tile`'s events in order into the buffers, its counts into `out`. For a draw it finds
+// the draw's records in the tile's list by galloping from the previous position (cheap for
+// reducePCS's runs of neighbouring and repeated ranges) and rasterizes them clipped to the tile,
+// recording the fragments in `cache` (the thread's); a later draw of the same records in the
+// tile replays them.
+void runTile(const TileJob& job, size_t tile, FragCache& cache, TileOut& out);
+
+}  // namespace cullide::raster::detail
