@@ -2,7 +2,7 @@
 // class and times; `--json FILE` writes them as [objectA, triA, objectB, triB, class] rows,
 // sorted, degenerate triangles as [object, tri, object, tri, "degenerate"] (CGAL's (f, f)).
 #include "commands.h"
-#include "oracle_check.h"
+#include "oracle.h"
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"

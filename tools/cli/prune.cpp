@@ -1,15 +1,15 @@
 // `cullide prune SCENE`: the potentially colliding set of every frame of a scene, by Cullide or
 // the seed paper's self-intersection variant, with per-pass statistics.
 #include "commands.h"
-#include "oracle_check.h"
+#include "oracle.h"
 #include "pictures.h"
-#include "study.h"
 
 #include "cullide/cullide.h"
 #include "cullide/error.h"
 #include "cullide/file_io.h"
 #include "cullide/mesh_io.h"
 #include "cullide/scene_io.h"
+#include "cullide/study/study.h"
 
 #include <nlohmann/json.hpp>
 
@@ -36,7 +36,7 @@ struct PruneOptions {
     long frame = -1;  // -1: every frame
     std::string json, out;
     std::string frames;  // folder for the Figure 12 pictures
-    bool check = false, exact = false;  // against the exact oracle (oracle_check.h)
+    bool check = false, exact = false;  // against the exact oracle (oracle.h)
 };
 
 CullideOptions cullideOptions(const PruneOptions& o) {

@@ -1,12 +1,12 @@
 // `cullide study`: precision studies (sweeps timed and measured against the oracle, false prunes
 // attributed to causes), their shards and merging, and the stability sweeps. The engine is in
-// tools/study/ (study.h, causes.h, probes.h); the rules are in docs/studies.md.
+// tools/study/ (cullide/study/: study.h, causes.h, probes.h); the rules are in docs/studies.md.
 #include "commands.h"
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
-#include "probes.h"
-#include "study.h"
+#include "cullide/study/probes.h"
+#include "cullide/study/study.h"
 
 #include <unistd.h>
 

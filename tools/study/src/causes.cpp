@@ -1,5 +1,5 @@
 // Attribution of false prunes to the causes of the seed paper's Section 5 (causes.h).
-#include "causes.h"
+#include "cullide/study/causes.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,7 @@
 // The study engine: specs, the sweep, one run, resumable output, shards and merging (study.h).
-#include "causes.h"
-#include "study.h"
+#include "cullide/study/study.h"
+
+#include "cullide/study/causes.h"
 
 #include "cullide/error.h"
 #include "cullide/generators.h"

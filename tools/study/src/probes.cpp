@@ -1,8 +1,8 @@
 // Stability sweeps over small controlled scenes and jittered paper scenes (probes.h).
-#include "probes.h"
+#include "cullide/study/probes.h"
 
-#include "causes.h"
-#include "study.h"
+#include "cullide/study/causes.h"
+#include "cullide/study/study.h"
 
 #include "cullide/oracle/measures.h"
 #include "cullide/raster/cpu_backend.h"
