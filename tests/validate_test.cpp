@@ -3,6 +3,7 @@
 // reference's counts, and on llvmpipe no query of the bundled scenes falls outside its interval.
 #include "cullide/cullide.h"
 #include "cullide/error.h"
+#include "cullide/raster/backends.h"
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/raster/gl_backend.h"
 #include "cullide/raster/validate.h"
@@ -10,9 +11,13 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <array>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <random>
 
 namespace cullide {
@@ -124,7 +129,7 @@ bool glMissing(std::string& why) { return !raster::glBackendAvailable(&why); }
     do {                                                                              \
         std::string why;                                                              \
         if (glMissing(why)) {                                                         \
-            if (std::getenv("CULLIDE_REQUIRE_GL")) FAIL() << "no GL: " << why;       \
+            if (std::getenv("CULLIDE_REQUIRE_GL") && raster::glBuilt()) FAIL() << "no GL: " << why; \
             GTEST_SKIP() << "no GL context: " << why;                                \
         }                                                                             \
     } while (0)
@@ -198,6 +203,28 @@ TEST(Validate, CommandReportsRatesAndExitsZeroWhenEverythingIsInside) {
     EXPECT_NE(out.find("in interval"), std::string::npos) << out;
     EXPECT_NE(out.find("outside 0"), std::string::npos) << out;
     EXPECT_NE(out.find("PCS reference"), std::string::npos) << out;
+}
+
+// A build without GL (-DCULLIDE_GL=OFF) says so for every way of asking for GL, exit status 2.
+TEST(Validate, GlNotBuiltIsSaid) {
+    if (raster::glBuilt()) GTEST_SKIP() << "GL is built";
+    const std::string cow = std::string("'") + CULLIDE_DATA_DIR + "/meshes/cow.off'";
+    const std::filesystem::path out =
+        std::filesystem::temp_directory_path() / ("cullide_nogl_" + std::to_string(getpid()));
+    std::filesystem::create_directories(out);
+    const std::string study = "study --scenes bunny:500 --backends gl --no-oracle -q -o '" + out.string() + "/s.csv'";
+    for (const std::string& args : {"prune " + cow + " --backend gl", "validate " + cow, study}) {
+        FILE* p = popen((std::string("'") + CULLIDE_CLI_PATH + "' " + args + " 2>&1").c_str(), "r");
+        ASSERT_NE(p, nullptr);
+        std::string text;
+        std::array<char, 4096> buf;
+        size_t n;
+        while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) text.append(buf.data(), n);
+        const int status = pclose(p);
+        EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << args << ": " << text;
+        EXPECT_NE(text.find(raster::kGlNotBuilt), std::string::npos) << args << ": " << text;
+    }
+    std::filesystem::remove_all(out);
 }
 
 }  // namespace

@@ -8,8 +8,8 @@
 #include "cullide/error.h"
 #include "cullide/file_io.h"
 #include "cullide/mesh_io.h"
+#include "cullide/raster/backends.h"
 #include "cullide/scene_io.h"
-#include "cullide/study/study.h"
 
 #include <nlohmann/json.hpp>
 
@@ -86,7 +86,7 @@ void writePcsPly(const Scene& scene, const std::vector<PcsTriangle>& pcs, const 
 
 int runPrune(const PruneOptions& o) {
     const CullideOptions options = cullideOptions(o);
-    const std::unique_ptr<DepthBackend> backend = study::makeBackend(o.backend, o.threads);
+    const std::unique_ptr<DepthBackend> backend = raster::makeBackend(o.backend, o.threads);
 
     const Animation animation = loadScene(o.scene);
     if (o.frame >= 0 && size_t(o.frame) >= animation.frameCount())
@@ -193,7 +193,7 @@ void addPruneCommand(CLI::App& app, Action& action) {
         ->capture_default_str();
     sub->add_option("--seed", o->seed, "Seed of the random hierarchy");
     sub->add_option("--backend", o->backend, "cpu (the reference rasterizer) | gl (OpenGL 4.5 through headless EGL)")
-        ->check(CLI::IsMember({"cpu", "gl"}))
+        ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
     sub->add_option("--threads", o->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));
     sub->add_option("--frame", o->frame, "Prune only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
@@ -206,7 +206,14 @@ void addPruneCommand(CLI::App& app, Action& action) {
                   "Measure the PCS against the exact oracle: false prunes by class, false positives, efficiency "
                   "(exit status 1 on a false prune the method promises not to make)");
     sub->add_flag("--exact", o->exact, "Run the exact stage on the PCS: the final intersecting pairs of the pipeline");
-    sub->callback([o, &action] { action = [o] { return runPrune(*o); }; });
+    sub->callback([o, sub, &action] {
+        // An option that does not apply is refused, not ignored.
+        if (sub->count("--seed") && o->hierarchy != "random")
+            throw CLI::ValidationError("--seed", "applies to --hierarchy random only");
+        if (sub->count("--threads") && o->backend != "cpu")
+            throw CLI::ValidationError("--threads", "applies to --backend cpu only");
+        action = [o] { return runPrune(*o); };
+    });
 }
 
 }  // namespace cullide::cli

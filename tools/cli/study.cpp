@@ -5,6 +5,7 @@
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
+#include "cullide/raster/backends.h"
 #include "cullide/study/probes.h"
 #include "cullide/study/study.h"
 
@@ -94,6 +95,24 @@ int runStability(const StudyCliOptions& o) {
     return unexplained ? 1 : 0;
 }
 
+// The sweep's options and the stability sweeps' are apart: an option that does not apply is
+// refused, not ignored.
+void refuseInapplicable(const StudyCliOptions& o, const CLI::App& sub) {
+    auto refuse = [&](const char* name, const char* why) {
+        if (sub.count(name) > 0) throw CLI::ValidationError(name, why);
+    };
+    if (o.stability.empty()) {
+        for (const char* name : {"--trials", "--resolution", "--seed"}) refuse(name, "applies to --stability only");
+        return;
+    }
+    if (!o.spec.empty()) throw CLI::ValidationError("spec", "a study spec does not apply to --stability");
+    for (const char* name : {"--preset", "--resolutions", "--hierarchies", "--leaf-sizes", "--backends", "--threads",
+                             "--repeats", "--no-oracle", "--shard"})
+        refuse(name, "does not apply to --stability");
+    if (o.stability != "tilt") refuse("--directions", "applies to --stability tilt only");
+    if (o.stability != "jitter") refuse("--scenes", "applies to --stability jitter only");
+}
+
 int runStudyCommand(const StudyCliOptions& o) {
     if (!o.stability.empty()) return runStability(o);
     study::StudyOptions so;
@@ -138,7 +157,7 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("--directions", o->directions, "Direction sets: axes, N, or a list (one set per argument)");
     sub->add_option("--hierarchies", o->hierarchies, "connectivity | random");
     sub->add_option("--leaf-sizes", o->leafSizes, "Hierarchy leaf sizes");
-    sub->add_option("--backends", o->backends, "cpu | gl");
+    sub->add_option("--backends", o->backends, "Backends: " + raster::backendNameList());
     sub->add_option("--threads", o->threads, "Worker threads per run (0: all cores)");
     sub->add_option("--repeats", o->repeats, "Timed runs per configuration (median, min, max)")->check(CLI::Range(1, 1000));
     sub->add_flag("--no-oracle", o->noOracle, "Time only: no oracle, no false prunes");
@@ -152,7 +171,9 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("--resolution", o->resolution, "Stability: viewport side")->check(CLI::Range(1, 16384));
     sub->add_option("--seed", o->seed, "Stability: random seed");
     sub->callback([o, sub, &action] {
-        if (sub->get_subcommands().empty()) action = [o] { return runStudyCommand(*o); };
+        if (!sub->get_subcommands().empty()) return;
+        refuseInapplicable(*o, *sub);
+        action = [o] { return runStudyCommand(*o); };
     });
 
     auto m = std::make_shared<MergeCliOptions>();
