@@ -187,19 +187,24 @@ TEST(Validate, BundledScenesHaveNoQueryOutsideItsInterval) {
     }
 }
 
-// Trap: the command exiting 0 when it should report, or not listing what it compared.
-TEST(Validate, CommandReportsRatesAndExitsZeroWhenEverythingIsInside) {
-    GL_OR_SKIP();
-    const std::string cmd = std::string("'") + CULLIDE_CLI_PATH + "' validate '" + CULLIDE_DATA_DIR +
-                            "/scenes/bunny_through_cow.json' --frame 0 --resolution 128 2>&1";
-    FILE* p = popen(cmd.c_str(), "r");
-    ASSERT_NE(p, nullptr);
+// Runs `cullide ARGS`: the exit status (128 + the signal when killed) and stdout and stderr together.
+std::pair<int, std::string> cli(const std::string& args) {
+    FILE* p = popen((std::string("'") + CULLIDE_CLI_PATH + "' " + args + " 2>&1").c_str(), "r");
+    if (!p) return {-1, "popen failed"};
     std::string out;
     std::array<char, 4096> buf;
     size_t n;
     while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) out.append(buf.data(), n);
     const int status = pclose(p);
-    EXPECT_EQ(WEXITSTATUS(status), 0) << out;
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), out};
+}
+
+// Trap: the command exiting 0 when it should report, or not listing what it compared.
+TEST(Validate, CommandReportsRatesAndExitsZeroWhenEverythingIsInside) {
+    GL_OR_SKIP();
+    const auto [status, out] =
+        cli("validate '" + std::string(CULLIDE_DATA_DIR) + "/scenes/bunny_through_cow.json' --frame 0 --resolution 128");
+    EXPECT_EQ(status, 0) << out;
     EXPECT_NE(out.find("in interval"), std::string::npos) << out;
     EXPECT_NE(out.find("outside 0"), std::string::npos) << out;
     EXPECT_NE(out.find("PCS reference"), std::string::npos) << out;
@@ -214,14 +219,8 @@ TEST(Validate, GlNotBuiltIsSaid) {
     std::filesystem::create_directories(out);
     const std::string study = "study --scenes bunny:500 --backends gl --no-oracle -q -o '" + out.string() + "/s.csv'";
     for (const std::string& args : {"prune " + cow + " --backend gl", "validate " + cow, study}) {
-        FILE* p = popen((std::string("'") + CULLIDE_CLI_PATH + "' " + args + " 2>&1").c_str(), "r");
-        ASSERT_NE(p, nullptr);
-        std::string text;
-        std::array<char, 4096> buf;
-        size_t n;
-        while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) text.append(buf.data(), n);
-        const int status = pclose(p);
-        EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << args << ": " << text;
+        const auto [status, text] = cli(args);
+        EXPECT_EQ(status, 2) << args << ": " << text;
         EXPECT_NE(text.find(raster::kGlNotBuilt), std::string::npos) << args << ": " << text;
     }
     std::filesystem::remove_all(out);

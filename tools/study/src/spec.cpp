@@ -70,6 +70,25 @@ public:
         }
     }
 
+    // A list of strings (with integers in [lo, hi] as their text when hi > 0), each checked by
+    // `parse`.
+    template <typename Parse>
+    std::vector<std::string> texts(const Json& v, const std::string& key, Parse parse, int64_t lo = 0,
+                                   int64_t hi = 0) const {
+        std::vector<std::string> out;
+        for (const Json& x : items(v, key)) out.push_back(hi > 0 ? textOrInteger(x, key, lo, hi) : text(x, key));
+        for (const std::string& t : out) check(key, t, parse);
+        return out;
+    }
+
+    // A list of integers in [lo, hi].
+    template <typename T>
+    std::vector<T> integers(const Json& v, const std::string& key, int64_t lo, int64_t hi) const {
+        std::vector<T> out;
+        for (const Json& x : items(v, key)) out.push_back(T(integer(x, key, lo, hi)));
+        return out;
+    }
+
 private:
     std::string source_;
 };
@@ -82,39 +101,26 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
     Spec s;
     for (const auto& [key, v] : j.items()) {
         if (key == "scenes") {
-            s.scenes.clear();
-            for (const Json& x : r.items(v, key)) s.scenes.push_back(r.text(x, key));
+            s.scenes = r.texts(v, key, [](const std::string&) { return 0; });  // checked when expanded
         } else if (key == "methods") {
-            s.methods.clear();
-            for (const Json& x : r.items(v, key)) s.methods.push_back(r.text(x, key));
-            for (const std::string& m : s.methods) r.check(key, m, parseCullMethod);
+            s.methods = r.texts(v, key, parseCullMethod);
         } else if (key == "resolutions") {
-            s.resolutions.clear();
-            for (const Json& x : r.items(v, key)) s.resolutions.push_back(r.textOrInteger(x, key, 1, 16384));
-            for (const std::string& t : s.resolutions) r.check(key, t, parseResolution);
+            s.resolutions = r.texts(v, key, parseResolution, 1, 16384);
         } else if (key == "depths") {
-            s.depths.clear();
-            for (const Json& x : r.items(v, key)) s.depths.push_back(r.textOrInteger(x, key, 8, 32));
-            for (const std::string& t : s.depths) r.check(key, t, DepthFormat::parse);
+            s.depths = r.texts(v, key, DepthFormat::parse, 8, 32);
         } else if (key == "directions") {
-            s.directions.clear();
-            for (const Json& x : r.items(v, key)) s.directions.push_back(r.textOrInteger(x, key, 1, 10000));
-            for (const std::string& t : s.directions) r.check(key, t, parseDirections);
+            s.directions = r.texts(v, key, parseDirections, 1, 10000);
         } else if (key == "hierarchies") {
-            s.hierarchies.clear();
-            for (const Json& x : r.items(v, key)) s.hierarchies.push_back(r.text(x, key));
-            for (const std::string& t : s.hierarchies) r.check(key, t, parseHierarchyKind);
+            s.hierarchies = r.texts(v, key, parseHierarchyKind);
         } else if (key == "leaf_sizes") {
-            s.leafSizes.clear();
-            for (const Json& x : r.items(v, key)) s.leafSizes.push_back(uint32_t(r.integer(x, key, 1, 1'000'000)));
+            s.leafSizes = r.integers<uint32_t>(v, key, 1, 1'000'000);
         } else if (key == "backends") {
-            s.backends.clear();
-            for (const Json& x : r.items(v, key)) s.backends.push_back(r.text(x, key));
-            for (const std::string& b : s.backends)
-                if (!raster::isBackendName(b)) r.fail(key, "'" + b + "': " + raster::backendNameList());
+            s.backends = r.texts(v, key, [](const std::string& b) {
+                if (!raster::isBackendName(b)) throw InputError("backend", raster::backendNameList());
+                return 0;
+            });
         } else if (key == "threads") {
-            s.threads.clear();
-            for (const Json& x : r.items(v, key)) s.threads.push_back(int(r.integer(x, key, 0, 1024)));
+            s.threads = r.integers<int>(v, key, 0, 1024);
         } else if (key == "branching") {
             s.branching = uint32_t(r.integer(r.single(v, key), key, 2, 64));
         } else if (key == "seed") {
