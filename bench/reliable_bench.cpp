@@ -18,9 +18,9 @@
 #include "cullide/cullide.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
-#include "cullide/oracle/measures.h"
 #include "cullide/oracle/oracle.h"
 #include "cullide/raster/cpu_backend.h"
+#include "cullide/study/measures.h"
 
 #include "bench_util.h"
 
@@ -52,7 +52,7 @@ void BM_ReliableCost(benchmark::State& state) {
     o.hierarchy.leafSize = uint32_t(state.range(4));
     CullideResult r;
     for (auto _ : state) r = runCullide(s, *backend, o);
-    const oracle::PcsReport rep = oracle::measurePcs(s, truth(which, tris), r.pcs, o);
+    const study::PcsReport rep = study::measurePcs(s, truth(which, tris), r.pcs, o);
     size_t rendered = 0, queries = 0;
     for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
     state.counters["triangles"] = double(s.triangleCount());

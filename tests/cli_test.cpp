@@ -148,9 +148,10 @@ TEST(Cli, AbsurdOptionsAreRefused) {
 // unordered containers, threads or implementation-defined distributions). A different seed
 // changes the randomized scene.
 TEST(Cli, MakeSceneIsByteReproducible) {
-    for (const std::string kind : {"bunny", "cows", "cylinders"}) {
+    for (const std::string kind : {"bunny", "cows", "cylinders", "twist"}) {
         const fs::path a = freshDir(kind + "_a"), b = freshDir(kind + "_b");
-        const std::string opts = " --triangles 3000 --frames 2 --count 10 --seed 7 -o ";
+        const std::string opts =
+            std::string(" --triangles 3000 --frames 2") + (kind == "cylinders" ? " --count 10 --seed 7" : "") + " -o ";
         ASSERT_EQ(cullide("make-scene " + kind + opts + quote((a / "s.json").string())).status, 0);
         ASSERT_EQ(cullide("make-scene " + kind + opts + quote((b / "s.json").string())).status, 0);
         size_t files = 0;
@@ -260,4 +261,101 @@ TEST(Cli, PruneJsonAndPly) {
     const std::string ply = readAll(d / "pcs.ply");
     EXPECT_EQ(ply.rfind("ply\n", 0), 0u);
     EXPECT_NE(ply.find("property uchar red"), std::string::npos);
+}
+
+// A valid spec mutated field by field (wrong type, empty list, huge and negative numbers) and an
+// unknown field: every one is refused with exit status 2 and a message naming the field, before
+// anything runs, never by a signal (the issue's `"branching": []` once ended in an uncaught
+// std::out_of_range, status 134).
+TEST(Cli, StudySpecMutationsAreRefusedByName) {
+    const fs::path d = freshDir("spec");
+    const nlohmann::json valid = nlohmann::json::parse(R"({"scenes": ["bunny:500"], "methods": ["modified"],
+        "resolutions": [64], "depths": [16], "directions": ["axes"], "hierarchies": ["connectivity"],
+        "leaf_sizes": [16], "backends": ["cpu"], "threads": [1], "branching": 4, "seed": 1, "repeats": 1,
+        "oracle": false})");
+    auto run = [&](const nlohmann::json& spec) {
+        const fs::path file = d / "spec.json";
+        std::ofstream(file) << spec.dump();
+        return cullide("study " + quote(file.string()) + " -q -o " + quote((d / "out.csv").string()));
+    };
+    const CliRun ok = run(valid);
+    ASSERT_EQ(ok.status, 0) << ok.output;
+
+    const nlohmann::json huge = nlohmann::json::parse("18446744073709551616");  // beyond uint64: a float
+    const std::vector<nlohmann::json> mutations = {nlohmann::json::object({{"a", 1}}), nlohmann::json::array(),
+                                                   nlohmann::json::array({nlohmann::json::array()}), true, 2.5,
+                                                   -1, 4294967297LL, 1e300, huge, ""};
+    size_t refused = 0;
+    for (const auto& [key, value] : valid.items()) {
+        for (const nlohmann::json& m : mutations) {
+            if (m == value) continue;
+            if (key == "seed" && m == 4294967297LL) continue;  // a valid seed
+            if (key == "oracle" && m.is_boolean()) continue;
+            nlohmann::json spec = valid;
+            spec[key] = m;
+            const CliRun r = run(spec);
+            EXPECT_EQ(r.status, 2) << key << " = " << m.dump() << ": " << r.output;
+            EXPECT_NE(r.output.find("'" + key + "'"), std::string::npos)
+                << key << " = " << m.dump() << ": " << r.output;
+            ++refused;
+        }
+    }
+    EXPECT_GT(refused, 100u);
+    nlohmann::json unknown = valid;
+    unknown["branchng"] = 4;
+    const CliRun u = run(unknown);
+    EXPECT_EQ(u.status, 2) << u.output;
+    EXPECT_NE(u.output.find("'branchng'"), std::string::npos) << u.output;
+
+    const CliRun issue = run(nlohmann::json::parse(R"({"scenes":["bunny:500"],"branching":[]})"));
+    EXPECT_EQ(issue.status, 2) << issue.output;
+    EXPECT_NE(issue.output.find("branching"), std::string::npos) << issue.output;
+}
+
+// An option that does not apply to the kind, hierarchy, backend or mode is refused by name, never
+// silently ignored; --triangles for 'twist' resamples the source mesh, as the study's twist:N.
+TEST(Cli, OptionsThatDoNotApplyAreRefused) {
+    const fs::path d = freshDir("inapplicable");
+    const std::string out = quote((d / "s.json").string());
+    const std::string cow = quote(kData + "/meshes/cow.off");
+    const std::pair<std::string, std::string> cases[] = {
+        {"make-scene bunny --count 5 -o " + out, "--count"},
+        {"make-scene twist --seed 2 -o " + out, "--seed"},
+        {"make-scene cows --seed 1 -o " + out, "--seed"},
+        {"make-scene cylinders --mesh " + cow + " -o " + out, "--mesh"},
+        {"prune " + cow + " --seed 3", "--seed"},
+        {"prune " + cow + " --backend gl --threads 2", "--threads"},
+        {"study --stability tilt --repeats 2 -o " + quote((d / "t.csv").string()), "--repeats"},
+        {"study --stability penetration --scenes bunny:500 -o " + quote((d / "t.csv").string()), "--scenes"},
+        {"study --scenes bunny:500 --trials 3 -o " + quote((d / "t.csv").string()), "--trials"},
+    };
+    for (const auto& [args, needle] : cases) {
+        const CliRun r = cullide(args);
+        EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+        EXPECT_NE(r.output.find(needle), std::string::npos) << args << ": " << r.output;
+    }
+    EXPECT_TRUE(fs::is_empty(d)) << "a refused command wrote its output";
+
+    const CliRun twist = cullide("make-scene twist --triangles 20000 -o " + out);
+    ASSERT_EQ(twist.status, 0) << twist.output;
+    // "<path>: 1 object(s), N triangles, ...": about the request, not the source's 3,674.
+    const size_t at = twist.output.find(" triangles,");
+    ASSERT_NE(at, std::string::npos) << twist.output;
+    const size_t from = twist.output.rfind(' ', at - 1);
+    EXPECT_NEAR(std::stod(twist.output.substr(from + 1, at - from - 1)), 20000.0, 1000.0) << twist.output;
+}
+
+// Writing into a folder that does not exist says so, naming the folder; nothing is created.
+TEST(Cli, MissingOutputFolderIsNamed) {
+    const fs::path missing = freshDir("nofolder") / "not_there";
+    const std::string cow = quote(kData + "/meshes/cow.off");
+    for (const std::string& args : {"prune " + cow + " --resolution 64 --json " + quote((missing / "p.json").string()),
+                                    "oracle " + cow + " --json " + quote((missing / "o.json").string()),
+                                    "make-scene cylinders --count 2 -o " + quote((missing / "s.json").string())}) {
+        const CliRun r = cullide(args);
+        EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+        EXPECT_NE(r.output.find("folder " + missing.string() + " does not exist"), std::string::npos)
+            << args << ": " << r.output;
+    }
+    EXPECT_FALSE(fs::exists(missing));
 }

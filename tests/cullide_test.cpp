@@ -273,6 +273,17 @@ TEST(Cullide, FitViewIsTight) {
 }
 
 // Bad option values are refused with a message naming the option, before any work.
+// Which false prunes break a method's promise (`prune --check` exits 1 on them): reliable keeps every
+// intersecting pair, modified the crossing ones, original those between two objects.
+TEST(Cullide, PromisesToKeepFollowTheMethods) {
+    for (bool crossing : {false, true})
+        for (bool sameObject : {false, true}) {
+            EXPECT_TRUE(promisesToKeep(CullMethod::Reliable, crossing, sameObject));
+            EXPECT_EQ(promisesToKeep(CullMethod::Modified, crossing, sameObject), crossing);
+            EXPECT_EQ(promisesToKeep(CullMethod::Original, crossing, sameObject), !sameObject);
+        }
+}
+
 TEST(Cullide, BadOptionsRefused) {
     EXPECT_THROW(parseCullMethod("reliable-ish"), InputError);
     EXPECT_THROW(parseDirections(""), InputError);

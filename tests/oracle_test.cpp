@@ -218,7 +218,7 @@ TEST(Oracle, RefusesNonFiniteAndHugeCoordinates) {
     m.positions[1].x() = 1;
     m.triangles[0][2] = 7;
     EXPECT_THROW(findIntersections(sceneOf({m})), InputError);
-    EXPECT_THROW(exactStage(sceneOf({meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}})}), std::vector<PcsTriangle>{{0, 1}}),
+    EXPECT_THROW(exactStage(sceneOf({meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}})}), std::vector<TriangleRef>{{0, 1}}),
                  InputError);
 }
 
@@ -246,7 +246,7 @@ TEST(Oracle, ExactStageIsTheTruthRestrictedToThePcs) {
     req.triangles = 6000;
     const Scene scene = makeTwoCows(bundled("cow.off"), req).scene;
     const Truth truth = findIntersections(scene);
-    std::vector<PcsTriangle> all, half;
+    std::vector<TriangleRef> all, half;
     for (uint32_t t = 0; t < scene.objects[0].mesh.triangleCount(); ++t) {
         all.push_back({0, t});
         if (t % 2) half.push_back({0, t});

@@ -8,10 +8,10 @@
 #include "cullide/error.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
-#include "cullide/oracle/measures.h"
 #include "cullide/oracle/oracle.h"
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/scene_io.h"
+#include "cullide/study/measures.h"
 
 #include "../core/src/reliable.h"
 
@@ -77,7 +77,7 @@ Mesh selfCrossingRibbon(int segments) {
 
 struct Outcome {
     CullideResult result;
-    oracle::PcsReport report;
+    study::PcsReport report;
 };
 
 Outcome reliable(const Scene& scene, int resolution, DepthFormat depth, uint32_t leafSize = 16,
@@ -93,11 +93,11 @@ Outcome reliable(const Scene& scene, int resolution, DepthFormat depth, uint32_t
     o.directions = std::move(directions);
     Outcome r;
     r.result = runCullide(scene, *backend, o);
-    r.report = oracle::measurePcs(scene, oracle::findIntersections(scene), r.result.pcs, o);
+    r.report = study::measurePcs(scene, oracle::findIntersections(scene), r.result.pcs, o);
     return r;
 }
 
-std::string describe(const oracle::PcsReport& r) {
+std::string describe(const study::PcsReport& r) {
     return "false prunes " + std::to_string(r.falsePruneCount()) + " (crossing " + std::to_string(r.falsePrunes[0]) +
            ", touching " + std::to_string(r.falsePrunes[1]) + "), PCS " + std::to_string(r.pcsTriangles) +
            ", colliding " + std::to_string(r.collidingTriangles);
@@ -368,7 +368,7 @@ TEST(ReliableAcceptance, ZeroFalsePrunesOnGeneratedScenesAcrossResolutionsAndFor
                 o.width = o.height = res;
                 o.depth = f;
                 const CullideResult r = runCullide(c.scene, *backend, o);
-                const oracle::PcsReport rep = oracle::measurePcs(c.scene, truth, r.pcs, o);
+                const study::PcsReport rep = study::measurePcs(c.scene, truth, r.pcs, o);
                 EXPECT_EQ(rep.falsePruneCount(), 0u) << c.name << " " << res << " " << f.name() << ": " << describe(rep);
             }
     }

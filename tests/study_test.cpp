@@ -1,8 +1,8 @@
 // The study engine (tools/study): sweeps, shards and merging, resuming, the causes of false
 // prunes, and the four stability sweeps at small sizes.
-#include "causes.h"
-#include "probes.h"
-#include "study.h"
+#include "cullide/study/causes.h"
+#include "cullide/study/probes.h"
+#include "cullide/study/study.h"
 
 #include "test_util.h"
 

@@ -3,6 +3,7 @@
 // reference's counts, and on llvmpipe no query of the bundled scenes falls outside its interval.
 #include "cullide/cullide.h"
 #include "cullide/error.h"
+#include "cullide/raster/backends.h"
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/raster/gl_backend.h"
 #include "cullide/raster/validate.h"
@@ -10,9 +11,13 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <array>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <random>
 
 namespace cullide {
@@ -124,7 +129,7 @@ bool glMissing(std::string& why) { return !raster::glBackendAvailable(&why); }
     do {                                                                              \
         std::string why;                                                              \
         if (glMissing(why)) {                                                         \
-            if (std::getenv("CULLIDE_REQUIRE_GL")) FAIL() << "no GL: " << why;       \
+            if (std::getenv("CULLIDE_REQUIRE_GL") && raster::glBuilt()) FAIL() << "no GL: " << why; \
             GTEST_SKIP() << "no GL context: " << why;                                \
         }                                                                             \
     } while (0)
@@ -182,22 +187,43 @@ TEST(Validate, BundledScenesHaveNoQueryOutsideItsInterval) {
     }
 }
 
-// Trap: the command exiting 0 when it should report, or not listing what it compared.
-TEST(Validate, CommandReportsRatesAndExitsZeroWhenEverythingIsInside) {
-    GL_OR_SKIP();
-    const std::string cmd = std::string("'") + CULLIDE_CLI_PATH + "' validate '" + CULLIDE_DATA_DIR +
-                            "/scenes/bunny_through_cow.json' --frame 0 --resolution 128 2>&1";
-    FILE* p = popen(cmd.c_str(), "r");
-    ASSERT_NE(p, nullptr);
+// Runs `cullide ARGS`: the exit status (128 + the signal when killed) and stdout and stderr together.
+std::pair<int, std::string> cli(const std::string& args) {
+    FILE* p = popen((std::string("'") + CULLIDE_CLI_PATH + "' " + args + " 2>&1").c_str(), "r");
+    if (!p) return {-1, "popen failed"};
     std::string out;
     std::array<char, 4096> buf;
     size_t n;
     while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) out.append(buf.data(), n);
     const int status = pclose(p);
-    EXPECT_EQ(WEXITSTATUS(status), 0) << out;
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), out};
+}
+
+// Trap: the command exiting 0 when it should report, or not listing what it compared.
+TEST(Validate, CommandReportsRatesAndExitsZeroWhenEverythingIsInside) {
+    GL_OR_SKIP();
+    const auto [status, out] =
+        cli("validate '" + std::string(CULLIDE_DATA_DIR) + "/scenes/bunny_through_cow.json' --frame 0 --resolution 128");
+    EXPECT_EQ(status, 0) << out;
     EXPECT_NE(out.find("in interval"), std::string::npos) << out;
     EXPECT_NE(out.find("outside 0"), std::string::npos) << out;
     EXPECT_NE(out.find("PCS reference"), std::string::npos) << out;
+}
+
+// A build without GL (-DCULLIDE_GL=OFF) says so for every way of asking for GL, exit status 2.
+TEST(Validate, GlNotBuiltIsSaid) {
+    if (raster::glBuilt()) GTEST_SKIP() << "GL is built";
+    const std::string cow = std::string("'") + CULLIDE_DATA_DIR + "/meshes/cow.off'";
+    const std::filesystem::path out =
+        std::filesystem::temp_directory_path() / ("cullide_nogl_" + std::to_string(getpid()));
+    std::filesystem::create_directories(out);
+    const std::string study = "study --scenes bunny:500 --backends gl --no-oracle -q -o '" + out.string() + "/s.csv'";
+    for (const std::string& args : {"prune " + cow + " --backend gl", "validate " + cow, study}) {
+        const auto [status, text] = cli(args);
+        EXPECT_EQ(status, 2) << args << ": " << text;
+        EXPECT_NE(text.find(raster::kGlNotBuilt), std::string::npos) << args << ": " << text;
+    }
+    std::filesystem::remove_all(out);
 }
 
 }  // namespace

@@ -16,8 +16,8 @@ cullide=build/tools/cullide
 
 mkdir -p out/scenes
 echo "== demo: generate the paper's scenes into out/scenes"
-"$cullide" make-scene bunny --triangles 5000 --seed 1 -o out/scenes/bunny_5k.json
-"$cullide" make-scene cows --triangles 5000 --seed 1 -o out/scenes/cows_5k.json
+"$cullide" make-scene bunny --triangles 5000 -o out/scenes/bunny_5k.json
+"$cullide" make-scene cows --triangles 5000 -o out/scenes/cows_5k.json
 "$cullide" make-scene cylinders --count 100 --triangles 20000 --frames 4 --seed 1 -o out/scenes/cylinders.json
 
 echo "== demo: cullide info over the bundled and generated scenes"

@@ -38,6 +38,15 @@ CullMethod parseCullMethod(const std::string& text) {
     throw InputError("option --method", "unknown method '" + text + "' (expected original, modified or reliable)");
 }
 
+bool promisesToKeep(CullMethod method, bool crossing, bool sameObject) {
+    switch (method) {
+        case CullMethod::Original: return !sameObject;
+        case CullMethod::Modified: return crossing;
+        case CullMethod::Reliable: return true;
+    }
+    return true;
+}
+
 std::vector<Vec3d> axisDirections() {
     return {Vec3d(1, 0, 0), Vec3d(-1, 0, 0), Vec3d(0, 1, 0), Vec3d(0, -1, 0), Vec3d(0, 0, 1), Vec3d(0, 0, -1)};
 }

@@ -39,7 +39,15 @@ void writeFileAtomically(const fs::path& path, std::string_view bytes) {
     fs::path tmp = path;
     tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
     std::FILE* f = std::fopen(tmp.string().c_str(), "wb");
-    if (!f) throw InputError(src, std::string("cannot write: ") + std::strerror(errno));
+    if (!f) {
+        const int openErrno = errno;
+        // The commonest cause, said plainly: the folder to write into is not there.
+        const fs::path folder = path.parent_path();
+        std::error_code ec;
+        if (!folder.empty() && !fs::exists(folder, ec))
+            throw InputError(src, "folder " + folder.string() + " does not exist");
+        throw InputError(src, std::string("cannot write: ") + std::strerror(openErrno));
+    }
     const bool wrote = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
     const int writeErrno = errno;
     const bool closed = std::fclose(f) == 0;

@@ -271,10 +271,10 @@ BroadPhase parseBroadPhase(const std::string& text) {
 
 Truth findIntersections(const Scene& scene, const OracleOptions& options) { return run(scene, options, nullptr); }
 
-Truth exactStage(const Scene& scene, std::span<const PcsTriangle> pcs, const OracleOptions& options) {
+Truth exactStage(const Scene& scene, std::span<const TriangleRef> pcs, const OracleOptions& options) {
     std::vector<std::vector<char>> subset(scene.objects.size());
     for (size_t o = 0; o < scene.objects.size(); ++o) subset[o].assign(scene.objects[o].mesh.triangleCount(), 0);
-    for (const PcsTriangle& p : pcs) {
+    for (const TriangleRef& p : pcs) {
         if (p.object >= scene.objects.size() || p.triangle >= subset[p.object].size())
             throw InputError("pcs", "entry (" + std::to_string(p.object) + ", " + std::to_string(p.triangle) +
                                         ") names no triangle of the scene");

@@ -2,7 +2,8 @@
 //
 // Every subcommand reports bad input (files, scenes, options) as an InputError; main() prints it
 // as "cullide: error: <file or option>: <cause>" and exits with status 2. Status 1 is reserved
-// for a run that worked but found a failure it was asked to check for.
+// for a run that worked but found a failure it was asked to check for. Any other exception is a
+// bug: "cullide: internal error: ..." and status 70, never an abort.
 #pragma once
 
 #include "cullide/error.h"

@@ -7,7 +7,9 @@
 #include <cstdio>
 #include <exception>
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
     CLI::App app{"cullide: image-space collision and self-intersection culling (Cullide and its "
                  "self-intersection variant), with a deterministic CPU reference rasterizer"};
     app.require_subcommand(1);
@@ -50,4 +52,22 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "cullide: error: out of memory\n");
         return 2;
     }
+}
+
+}  // namespace
+
+// The last resort: anything else that escapes a command is a bug in cullide, reported as one
+// with its own exit status (70, EX_SOFTWARE), never an abort.
+int main(int argc, char** argv) {
+    try {
+        return run(argc, argv);
+    } catch (const cullide::InputError& e) {  // from an option's check while parsing
+        std::fprintf(stderr, "cullide: error: %s\n", e.what());
+        return 2;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "cullide: internal error: %s\n", e.what());
+    } catch (...) {
+        std::fprintf(stderr, "cullide: internal error: an unknown exception\n");
+    }
+    return 70;
 }

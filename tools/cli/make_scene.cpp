@@ -30,6 +30,7 @@ struct MakeSceneOptions {
     uint64_t seed = 1;
     size_t frames = 0;
     size_t count = 100;
+    bool resampleTwist = false;  // --triangles given for 'twist': resample the source mesh first
 };
 
 std::string defaultMesh(Kind k) {
@@ -53,7 +54,11 @@ int runMakeScene(const MakeSceneOptions& o) {
         switch (o.kind) {
             case Kind::Bunny: animation = makeDeformedBunny(mesh, request); break;
             case Kind::Cows: animation = makeTwoCows(mesh, request); break;
-            case Kind::Twist: animation = makeTwistAnimation(mesh, request); break;
+            case Kind::Twist:
+                // As the study's twist:N: the mesh resampled to the request, then twisted; without
+                // --triangles the source mesh as it is.
+                animation = makeTwistAnimation(o.resampleTwist ? resample(mesh, o.triangles) : mesh, request);
+                break;
             case Kind::Cylinders: break;
         }
     }
@@ -80,17 +85,29 @@ void addMakeSceneCommand(CLI::App& app, Action& action) {
         ->required()
         ->transform(CLI::CheckedTransformer(kinds, CLI::ignore_case));
     sub->add_option("-o,--out", o->out, "Scene file to write (.json); meshes are written beside it")->required();
-    sub->add_option("--triangles", o->triangles, "Requested triangle count, about (100 to 5,000,000)")
+    sub->add_option("--triangles", o->triangles,
+                    "Requested triangle count, about (100 to 5,000,000; default 5000, for 'twist' the source mesh's)")
         ->check(CLI::Range(size_t(100), size_t(5'000'000)));
-    sub->add_option("--seed", o->seed, "Random seed (same seed, same bytes)");
+    sub->add_option("--seed", o->seed,
+                    "Random seed of 'cylinders' (same seed, same bytes; the other kinds are not random)");
     sub->add_option("--frames", o->frames, "Frames of animation (0: a still scene; at most 10,000)")
         ->check(CLI::Range(size_t(0), size_t(10'000)));
     sub->add_option("--count", o->count, "Number of cylinders for 'cylinders' (1 to 10,000)")
         ->check(CLI::Range(size_t(1), size_t(10'000)));
-    sub->add_option("--mesh", o->mesh, "Source mesh (default: the bundled bunny, or the cow for 'cows')");
-    sub->callback([o, &action] {
+    sub->add_option("--mesh", o->mesh,
+                    "Source mesh of 'bunny', 'cows', 'twist' (default: the bundled bunny, or the cow for 'cows')");
+    sub->callback([o, sub, &action] {
         if (o->out.size() < 5 || o->out.substr(o->out.size() - 5) != ".json")
             throw CLI::ValidationError("--out", "the scene file must end in .json: " + o->out);
+        // An option the kind does not use is refused, not ignored.
+        const bool cylinders = o->kind == Kind::Cylinders;
+        if (cylinders && sub->count("--mesh"))
+            throw CLI::ValidationError("--mesh", "does not apply to 'cylinders' (generated, not made from a mesh)");
+        if (!cylinders && sub->count("--count"))
+            throw CLI::ValidationError("--count", "applies to 'cylinders' only");
+        if (!cylinders && sub->count("--seed"))
+            throw CLI::ValidationError("--seed", "applies to 'cylinders' only (the other kinds are not random)");
+        o->resampleTwist = o->kind == Kind::Twist && sub->count("--triangles") > 0;
         action = [o] { return runMakeScene(*o); };
     });
 }

@@ -2,13 +2,13 @@
 // class and times; `--json FILE` writes them as [objectA, triA, objectB, triB, class] rows,
 // sorted, degenerate triangles as [object, tri, object, tri, "degenerate"] (CGAL's (f, f)).
 #include "commands.h"
-#include "oracle_check.h"
+#include "oracle.h"
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
-#include "cullide/oracle/measures.h"
 #include "cullide/oracle/oracle.h"
 #include "cullide/scene_io.h"
+#include "cullide/study/measures.h"
 
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
@@ -92,13 +92,11 @@ PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const Cu
     out.json = nlohmann::ordered_json::object();
     if (check) {
         const oracle::Truth truth = oracle::findIntersections(scene);
-        const oracle::PcsReport r = oracle::measurePcs(scene, truth, pcs, options);
+        const study::PcsReport r = study::measurePcs(scene, truth, pcs, options);
         const size_t X = size_t(oracle::PairClass::Crossing), T = size_t(oracle::PairClass::Touching);
         size_t promised = 0;
-        for (const oracle::MissedPair& m : r.missed)
-            promised += options.method == CullMethod::Reliable   ? true  // every intersecting pair is kept
-                        : options.method == CullMethod::Modified ? m.pair.cls == oracle::PairClass::Crossing
-                                                                 : !m.pair.selfPair();
+        for (const study::MissedPair& m : r.missed)
+            promised += promisesToKeep(options.method, m.pair.cls == oracle::PairClass::Crossing, m.pair.selfPair());
         out.guaranteeBroken = promised > 0;
         std::printf("  check: %zu intersecting pair(s) (%zu crossing, %zu touching); false prunes: %zu triangle(s) "
                     "(%zu crossing, %zu touching), %zu pair(s) missed (%zu crossing, %zu touching; %zu the method "
@@ -108,9 +106,9 @@ PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const Cu
                     r.missedPairs[X], r.missedPairs[T], promised, r.falsePositives, r.efficiency, r.collidingInPcs,
                     r.pcsTriangles);
         nlohmann::ordered_json missed = nlohmann::ordered_json::array();
-        for (const oracle::MissedPair& m : r.missed) {
+        for (const study::MissedPair& m : r.missed) {
             nlohmann::ordered_json dirs = nlohmann::ordered_json::array();
-            for (const oracle::DirectionMeasure& d : m.directions)
+            for (const study::DirectionMeasure& d : m.directions)
                 dirs.push_back({{"penetration", std::isnan(d.penetration) ? nlohmann::ordered_json() : nlohmann::ordered_json(d.penetration)},
                                 {"depth_unit", d.depthUnit},
                                 {"pixel_centre", d.pixelCentre}});

@@ -1,15 +1,15 @@
 // `cullide prune SCENE`: the potentially colliding set of every frame of a scene, by Cullide or
 // the seed paper's self-intersection variant, with per-pass statistics.
 #include "commands.h"
-#include "oracle_check.h"
+#include "oracle.h"
 #include "pictures.h"
-#include "study.h"
 
 #include "cullide/cullide.h"
 #include "cullide/error.h"
 #include "cullide/file_io.h"
 #include "cullide/mesh_io.h"
 #include "cullide/options.h"
+#include "cullide/raster/backends.h"
 #include "cullide/scene_io.h"
 
 #include <nlohmann/json.hpp>
@@ -30,7 +30,7 @@ struct PruneOptions {
     long frame = -1;  // -1: every frame
     std::string json, out;
     std::string frames;  // folder for the Figure 12 pictures
-    bool check = false, exact = false;  // against the exact oracle (oracle_check.h)
+    bool check = false, exact = false;  // against the exact oracle (oracle.h)
 };
 
 // The scene at one frame as one mesh, PCS triangles green and the rest grey (Figures 6 and 7).
@@ -45,7 +45,7 @@ void writePcsPly(const Scene& scene, const std::vector<PcsTriangle>& pcs, const 
 
 int runPrune(const PruneOptions& o) {
     const CullideOptions options = parseCullideOptions(o.cullide);
-    const std::unique_ptr<DepthBackend> backend = study::makeBackend(o.backend, o.threads);
+    const std::unique_ptr<DepthBackend> backend = raster::makeBackend(o.backend, o.threads);
 
     const Animation animation = loadScene(o.scene);
     const auto [first, last] = selectFrames(animation, o.frame, o.scene);
@@ -149,7 +149,7 @@ void addPruneCommand(CLI::App& app, Action& action) {
         ->capture_default_str();
     sub->add_option("--seed", o->cullide.seed, "Seed of the random hierarchy");
     sub->add_option("--backend", o->backend, "cpu (the reference rasterizer) | gl (OpenGL 4.5 through headless EGL)")
-        ->check(CLI::IsMember({"cpu", "gl"}))
+        ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
     sub->add_option("--threads", o->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));
     sub->add_option("--frame", o->frame, "Prune only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
@@ -162,7 +162,14 @@ void addPruneCommand(CLI::App& app, Action& action) {
                   "Measure the PCS against the exact oracle: false prunes by class, false positives, efficiency "
                   "(exit status 1 on a false prune the method promises not to make)");
     sub->add_flag("--exact", o->exact, "Run the exact stage on the PCS: the final intersecting pairs of the pipeline");
-    sub->callback([o, &action] { action = [o] { return runPrune(*o); }; });
+    sub->callback([o, sub, &action] {
+        // An option that does not apply is refused, not ignored.
+        if (sub->count("--seed") && o->cullide.hierarchy != "random")
+            throw CLI::ValidationError("--seed", "applies to --hierarchy random only");
+        if (sub->count("--threads") && o->backend != "cpu")
+            throw CLI::ValidationError("--threads", "applies to --backend cpu only");
+        action = [o] { return runPrune(*o); };
+    });
 }
 
 }  // namespace cullide::cli

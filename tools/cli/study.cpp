@@ -1,15 +1,17 @@
 // `cullide study`: precision studies (sweeps timed and measured against the oracle, false prunes
 // attributed to causes), their shards and merging, and the stability sweeps. The engine is in
-// tools/study/ (study.h, causes.h, probes.h); the rules are in docs/studies.md.
+// tools/study/ (cullide/study/: study.h, causes.h, probes.h); the rules are in docs/studies.md.
 #include "commands.h"
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
-#include "probes.h"
-#include "study.h"
+#include "cullide/raster/backends.h"
+#include "cullide/study/probes.h"
+#include "cullide/study/study.h"
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 
 namespace cullide::cli {
@@ -95,10 +97,33 @@ int runStability(const StudyCliOptions& o) {
     return unexplained ? 1 : 0;
 }
 
+// The sweep's options and the stability sweeps' are apart: an option that does not apply is
+// refused, not ignored.
+void refuseInapplicable(const StudyCliOptions& o, const CLI::App& sub) {
+    auto refuse = [&](const char* name, const char* why) {
+        if (sub.count(name) > 0) throw CLI::ValidationError(name, why);
+    };
+    if (o.stability.empty()) {
+        for (const char* name : {"--trials", "--resolution", "--seed"}) refuse(name, "applies to --stability only");
+        return;
+    }
+    if (!o.spec.empty()) throw CLI::ValidationError("spec", "a study spec does not apply to --stability");
+    for (const char* name : {"--preset", "--resolutions", "--hierarchies", "--leaf-sizes", "--backends", "--threads",
+                             "--repeats", "--no-oracle", "--shard"})
+        refuse(name, "does not apply to --stability");
+    if (o.stability != "tilt") refuse("--directions", "applies to --stability tilt only");
+    if (o.stability != "jitter") refuse("--scenes", "applies to --stability jitter only");
+}
+
 int runStudyCommand(const StudyCliOptions& o) {
     if (!o.stability.empty()) return runStability(o);
     study::StudyOptions so;
     so.spec = buildSpec(o);
+    // The sweep is a product, so gl runs get every thread count too; say that they ignore it.
+    const auto& sp = so.spec;
+    const bool gl = std::find(sp.backends.begin(), sp.backends.end(), "gl") != sp.backends.end();
+    if (gl && std::any_of(sp.threads.begin(), sp.threads.end(), [](int t) { return t != 0; }))
+        std::fprintf(stderr, "cullide: warning: threads apply to the cpu backend only; the gl runs ignore them\n");
     if (!o.shard.empty()) so.shard = study::parseShard(o.shard);
     so.out = o.out;
     so.progress = !o.quiet && isatty(2);
@@ -139,7 +164,7 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("--directions", o->directions, "Direction sets: axes, N, or a list (one set per argument)");
     sub->add_option("--hierarchies", o->hierarchies, "connectivity | random");
     sub->add_option("--leaf-sizes", o->leafSizes, "Hierarchy leaf sizes");
-    sub->add_option("--backends", o->backends, "cpu | gl");
+    sub->add_option("--backends", o->backends, "Backends: " + raster::backendNameList());
     sub->add_option("--threads", o->threads, "Worker threads per run (0: all cores)");
     sub->add_option("--repeats", o->repeats, "Timed runs per configuration (median, min, max)")->check(CLI::Range(1, 1000));
     sub->add_flag("--no-oracle", o->noOracle, "Time only: no oracle, no false prunes");
@@ -153,7 +178,9 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("--resolution", o->resolution, "Stability: viewport side")->check(CLI::Range(1, kMaxViewportSide));
     sub->add_option("--seed", o->seed, "Stability: random seed");
     sub->callback([o, sub, &action] {
-        if (sub->get_subcommands().empty()) action = [o] { return runStudyCommand(*o); };
+        if (!sub->get_subcommands().empty()) return;
+        refuseInapplicable(*o, *sub);
+        action = [o] { return runStudyCommand(*o); };
     });
 
     auto m = std::make_shared<MergeCliOptions>();

@@ -62,6 +62,13 @@ enum class CullMethod : uint8_t {
 const char* toString(CullMethod m);
 CullMethod parseCullMethod(const std::string& text);  // "original" | "modified" | "reliable"; InputError
 
+// Whether `method` promises never to prune an intersecting pair of triangles: a crossing pair
+// (one passes through the other) or a touching one, of one object or of two. Reliable keeps every
+// pair; modified every crossing pair (a contact at equal depth may be lost); original every pair
+// between two objects (it never tests an object against itself). A false prune of a promised
+// pair is a bug, any other one a limit of the method (`prune --check` exits 1 on the former).
+bool promisesToKeep(CullMethod method, bool crossing, bool sameObject);
+
 // Directions: the six axis directions +x, -x, +y, -y, +z, -z (the default).
 std::vector<Vec3d> axisDirections();
 // N directions spread over the sphere (a Fibonacci lattice, deterministic). N >= 1.
@@ -79,10 +86,8 @@ struct PassStats {
     double seconds = 0;        // wall time of the call, command building and backend included
 };
 
-struct PcsTriangle {
-    uint32_t object = 0, triangle = 0;  // the object's index in the scene, the triangle's in its mesh
-    friend auto operator<=>(const PcsTriangle&, const PcsTriangle&) = default;
-};
+// A PCS entry: a triangle of the scene (scene.h).
+using PcsTriangle = TriangleRef;
 
 struct CullideOptions {
     CullMethod method = CullMethod::Modified;

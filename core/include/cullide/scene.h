@@ -16,6 +16,8 @@
 
 #include <Eigen/Geometry>
 
+#include <compare>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,6 +28,13 @@ using Transform = Eigen::Affine3f;
 
 // p' = T p, evaluated as M.col(0)*x + M.col(1)*y + M.col(2)*z + t in float, in that order.
 Vec3f applyTransform(const Transform& t, const Vec3f& p);
+
+// A triangle of a scene: the object's index in the scene, the triangle's index in its mesh (a PCS
+// entry, an oracle's degenerate triangle, one side of an intersecting pair).
+struct TriangleRef {
+    uint32_t object = 0, triangle = 0;
+    friend auto operator<=>(const TriangleRef&, const TriangleRef&) = default;
+};
 
 struct Object {
     std::string name;

@@ -33,7 +33,6 @@
 //     coordinates, |coordinate| > 2^60, indices out of range); nothing else is thrown.
 #pragma once
 
-#include "cullide/cullide.h"
 #include "cullide/scene.h"
 
 #include <array>
@@ -51,8 +50,8 @@ enum class PairClass : uint8_t {
 };
 const char* toString(PairClass c);  // "crossing" | "touching"
 
-// A triangle of the scene: object index, triangle index in that object's mesh.
-using TriangleRef = PcsTriangle;
+// A triangle of the scene: object index, triangle index in that object's mesh (scene.h).
+using TriangleRef = cullide::TriangleRef;
 
 struct IntersectingPair {
     uint32_t objectA = 0, triangleA = 0, objectB = 0, triangleB = 0;  // (A) < (B)
@@ -100,6 +99,6 @@ Truth findIntersections(const Scene& scene, const OracleOptions& options = {});
 // The exact stage of the pipeline (CULLIDE runs it after the GPU stage): the same narrow phase,
 // on the triangles of `pcs` only (pairs with both triangles in the PCS). Entries of `pcs` must
 // name triangles of `scene` (InputError("pcs", ...) otherwise); duplicates are ignored.
-Truth exactStage(const Scene& scene, std::span<const PcsTriangle> pcs, const OracleOptions& options = {});
+Truth exactStage(const Scene& scene, std::span<const TriangleRef> pcs, const OracleOptions& options = {});
 
 }  // namespace cullide::oracle

@@ -1,5 +1,7 @@
 // Attribution of false prunes to the causes of the seed paper's Section 5 (causes.h).
-#include "causes.h"
+#include "cullide/study/causes.h"
+
+#include "polygon.h"
 
 #include <algorithm>
 #include <cmath>
@@ -22,10 +24,6 @@ const char* toString(Cause c) {
 
 namespace {
 
-struct P2 {
-    double x, y;
-};
-
 // A triangle's window-space plane z(x, y) = z0 + a (x - x0) + b (y - y0), through the unsnapped
 // window vertices (raster rule 6). valid = false for zero projected area.
 struct Plane {
@@ -45,28 +43,6 @@ Plane planeOf(const Vec3d w[3]) {
     p.b = (ux * vz - uz * vx) / det;
     p.valid = std::isfinite(p.a) && std::isfinite(p.b);
     return p;
-}
-
-double cross(const P2& o, const P2& a, const P2& b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
-
-// Sutherland-Hodgman: the convex polygon `poly` clipped to the triangle t (either orientation).
-std::vector<P2> clip(std::vector<P2> poly, const P2 t[3]) {
-    const double orient = cross(t[0], t[1], t[2]) > 0 ? 1.0 : -1.0;
-    for (int e = 0; e < 3 && !poly.empty(); ++e) {
-        const P2 &a = t[e], &b = t[(e + 1) % 3];
-        std::vector<P2> out;
-        for (size_t i = 0; i < poly.size(); ++i) {
-            const P2 &p = poly[i], &q = poly[(i + 1) % poly.size()];
-            const double sp = orient * cross(a, b, p), sq = orient * cross(a, b, q);
-            if (sp >= 0) out.push_back(p);
-            if ((sp >= 0) != (sq >= 0)) {
-                const double s = sp / (sp - sq);
-                out.push_back({p.x + s * (q.x - p.x), p.y + s * (q.y - p.y)});
-            }
-        }
-        poly = std::move(out);
-    }
-    return poly;
 }
 
 // Stored value as a signed integer that orders like the depth (unorm k, or float bits).
@@ -134,7 +110,7 @@ PairSample samplePair(DepthBackend& backend, const std::array<Vec3f, 3>& t, cons
     if (pt.valid && px.valid) {
         const P2 tt[3] = {{wt[0].x(), wt[0].y()}, {wt[1].x(), wt[1].y()}, {wt[2].x(), wt[2].y()}};
         const P2 tx[3] = {{wx[0].x(), wx[0].y()}, {wx[1].x(), wx[1].y()}, {wx[2].x(), wx[2].y()}};
-        const std::vector<P2> overlap = clip({tt[0], tt[1], tt[2]}, tx);
+        const std::vector<P2> overlap = clipToTriangle({tt[0], tt[1], tt[2]}, tx);
         if (!overlap.empty()) {
             double reach = -std::numeric_limits<double>::infinity();
             for (const P2& p : overlap) reach = std::max(reach, (pt.at(p.x, p.y) - px.at(p.x, p.y)) / step);

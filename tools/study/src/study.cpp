@@ -1,15 +1,15 @@
 // The study engine: specs, the sweep, one run, resumable output, shards and merging (study.h).
-#include "causes.h"
-#include "study.h"
+#include "cullide/study/study.h"
+
+#include "cullide/study/causes.h"
+#include "cullide/study/measures.h"
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
-#include "cullide/oracle/measures.h"
 #include "cullide/parallel.h"
-#include "cullide/raster/cpu_backend.h"
-#include "cullide/raster/gl_backend.h"
+#include "cullide/raster/backends.h"
 #include "cullide/scene_io.h"
 
 #include <tbb/task_arena.h>
@@ -30,16 +30,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-template <typename T>
-std::vector<T> listOf(const nlohmann::json& v, const std::string& source, const char* key) {
-    try {
-        if (v.is_array()) return v.get<std::vector<T>>();
-        return {v.get<T>()};
-    } catch (const nlohmann::json::exception&) {
-        throw InputError(source, std::string("field '") + key + "': expected a value or a list of values");
-    }
-}
 
 std::string dataDir() { return CULLIDE_DATA_DIR; }
 
@@ -109,53 +99,6 @@ OptionNames specOptionNames(const std::string& source) {
     return n;
 }
 
-Spec parseSpec(const nlohmann::json& j, const std::string& source) {
-    if (!j.is_object()) throw InputError(source, "a study spec is a JSON object");
-    Spec s;
-    s.names = specOptionNames(source);
-    for (const auto& [key, v] : j.items()) {
-        if (key == "scenes") s.scenes = listOf<std::string>(v, source, "scenes");
-        else if (key == "methods") s.methods = listOf<std::string>(v, source, "methods");
-        else if (key == "resolutions") {
-            s.resolutions.clear();
-            for (const auto& r : (v.is_array() ? v : nlohmann::json::array({v})))
-                s.resolutions.push_back(r.is_number_integer() ? std::to_string(r.get<int>()) : r.is_string() ? r.get<std::string>() : throw InputError(source, "field 'resolutions': N or \"WxH\""));
-        } else if (key == "depths") {
-            s.depths.clear();
-            for (const auto& r : (v.is_array() ? v : nlohmann::json::array({v})))
-                s.depths.push_back(r.is_number_integer() ? std::to_string(r.get<int>()) : r.is_string() ? r.get<std::string>() : throw InputError(source, "field 'depths': bits or a name"));
-        } else if (key == "directions") {
-            s.directions.clear();
-            for (const auto& r : (v.is_array() ? v : nlohmann::json::array({v})))
-                s.directions.push_back(r.is_number_integer() ? std::to_string(r.get<int>()) : r.is_string() ? r.get<std::string>() : throw InputError(source, "field 'directions': \"axes\", N or a list string"));
-        } else if (key == "hierarchies") s.hierarchies = listOf<std::string>(v, source, "hierarchies");
-        else if (key == "leaf_sizes") s.leafSizes = listOf<uint32_t>(v, source, "leaf_sizes");
-        else if (key == "backends") s.backends = listOf<std::string>(v, source, "backends");
-        else if (key == "threads") s.threads = listOf<int>(v, source, "threads");
-        else if (key == "branching") s.branching = listOf<uint32_t>(v, source, "branching").at(0);
-        else if (key == "seed") s.seed = listOf<uint64_t>(v, source, "seed").at(0);
-        else if (key == "repeats") s.repeats = listOf<int>(v, source, "repeats").at(0);
-        else if (key == "oracle") {
-            if (!v.is_boolean()) throw InputError(source, "field 'oracle': true or false");
-            s.oracle = v.get<bool>();
-        } else
-            throw InputError(source, "unknown field '" + key + "' (fields: scenes, methods, resolutions, depths, "
-                                     "directions, hierarchies, leaf_sizes, backends, threads, branching, seed, "
-                                     "repeats, oracle)");
-    }
-    return s;
-}
-
-Spec loadSpec(const std::string& path) {
-    std::ifstream f(path);
-    if (!f) throw InputError(path, "cannot open the study spec");
-    try {
-        return parseSpec(nlohmann::json::parse(f), path);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw InputError(path, std::string("not JSON: ") + e.what());
-    }
-}
-
 Spec paperPreset(int repeats) {
     Spec s;
     // Five sizes per scene over the paper's ranges (bunny 5k-270k, cows 3k-270k).
@@ -216,7 +159,8 @@ std::vector<RunConfig> expand(const Spec& spec) {
     nonEmpty(spec.directions, "directions"), nonEmpty(spec.hierarchies, "hierarchies");
     nonEmpty(spec.leafSizes, "leaf sizes"), nonEmpty(spec.backends, "backends"), nonEmpty(spec.threads, "threads");
     for (const std::string& b : spec.backends)
-        if (b != "cpu" && b != "gl") throw InputError("study spec", "backend '" + b + "': cpu or gl");
+        if (!raster::isBackendName(b))
+            throw InputError("study spec", "backend '" + b + "': " + raster::backendNameList());
     for (int t : spec.threads)
         if (t < 0 || t > 1024) throw InputError("study spec", "threads must be 0 (all) to 1024");
     std::vector<RunConfig> out;
@@ -272,16 +216,6 @@ Shard parseShard(const std::string& text) {
 std::vector<RunConfig> slice(const std::vector<RunConfig>& all, const Shard& shard) {
     const size_t begin = all.size() * shard.index / shard.count, end = all.size() * (shard.index + 1) / shard.count;
     return {all.begin() + ptrdiff_t(begin), all.begin() + ptrdiff_t(end)};
-}
-
-std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads) {
-    if (name == "cpu") {
-        raster::CpuBackendOptions o;
-        o.threads = threads;
-        return raster::makeCpuBackend(o);
-    }
-    if (name == "gl") return raster::makeGlBackend();
-    throw InputError("backend", "'" + name + "': cpu or gl");
 }
 
 CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names) {
@@ -353,7 +287,7 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
                           "false_positives", "efficiency", "attribution_ms"})
         j[k] = nullptr;
     if (truth) {
-        const oracle::PcsReport rep = oracle::measurePcs(scene, *truth, r.pcs, options);
+        const PcsReport rep = measurePcs(scene, *truth, r.pcs, options);
         const auto start = Clock::now();
         Attribution a;
         executeIn(*arena, [&] { a = attributeFalsePrunes(scene, *truth, backend, options); });
@@ -504,7 +438,7 @@ size_t runStudy(const StudyOptions& opt) {
             sceneKey = key;
         }
         auto& backend = backends[{c.backend, c.threads}];
-        if (!backend) backend = makeBackend(c.backend, c.threads);
+        if (!backend) backend = raster::makeBackend(c.backend, c.threads);
         const nlohmann::ordered_json r = runOne(c, scene, truth.get(), opt.spec.repeats, *backend);
         csv << csvRow(r) << std::flush;
         jsonl << r.dump() << "\n" << std::flush;

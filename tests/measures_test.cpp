@@ -1,6 +1,6 @@
-// Tests for oracle/src/measures.cpp: false prunes by class, false positives, efficiency, and the
+// Tests for tools/study/src/measures.cpp: false prunes by class, false positives, efficiency, and the
 // per-pair explanations (penetration along a direction, pixel centres, edge-on).
-#include "cullide/oracle/measures.h"
+#include "cullide/study/measures.h"
 
 #include "cullide/error.h"
 
@@ -8,8 +8,10 @@
 
 #include <cmath>
 
-namespace cullide::oracle {
+namespace cullide::study {
 namespace {
+
+using namespace cullide::oracle;
 
 // Object 0: a big triangle in z = 0. Object 1: a triangle in the plane z = x that passes through
 // it, reaching 0.5 below and 0.5 above it (seen along z). Object 2: a triangle touching object
@@ -33,7 +35,7 @@ CullideOptions zOnly(int resolution) {
 
 // Trap: a PCS that holds every triangle has no false prune whatever the truth; the far triangle
 // is a false positive.
-TEST(OracleMeasures, FullPcsHasNoFalsePrune) {
+TEST(Measures, FullPcsHasNoFalsePrune) {
     const Scene s = crossingScene();
     const Truth t = findIntersections(s);
     ASSERT_EQ(t.pairs.size(), 2u);
@@ -50,7 +52,7 @@ TEST(OracleMeasures, FullPcsHasNoFalsePrune) {
 
 // Trap: a triangle in a crossing pair and a touching pair counts as a crossing false prune; the
 // touching partner only as touching. Duplicated PCS entries count once.
-TEST(OracleMeasures, FalsePrunesByClass) {
+TEST(Measures, FalsePrunesByClass) {
     const Scene s = crossingScene();
     const Truth t = findIntersections(s);
     const std::vector<PcsTriangle> pcs{{3, 0}, {3, 0}};
@@ -69,7 +71,7 @@ TEST(OracleMeasures, FalsePrunesByClass) {
 
 // The explanation of the crossing pair: along z, each reaches 0.5 behind the other (a depth
 // test sees it); along x the big triangle is edge-on (no depth function: NaN, no pixel centre).
-TEST(OracleMeasures, PenetrationPixelCentreAndEdgeOn) {
+TEST(Measures, PenetrationPixelCentreAndEdgeOn) {
     const Scene s = crossingScene();
     const Truth t = findIntersections(s);
     const CullideOptions o = zOnly(64);
@@ -91,14 +93,14 @@ TEST(OracleMeasures, PenetrationPixelCentreAndEdgeOn) {
 // Trap: an overlap smaller than a pixel that misses every pixel centre. At 2x2 pixels over the
 // whole scene (11 units), the crossing's projected overlap (1 x 1 unit near the origin) holds no
 // pixel centre; at 64x64 it does.
-TEST(OracleMeasures, SmallOverlapMissesPixelCentres) {
+TEST(Measures, SmallOverlapMissesPixelCentres) {
     const Scene s = crossingScene();
     const Truth t = findIntersections(s);
     EXPECT_FALSE(measurePcs(s, t, std::vector<PcsTriangle>{}, zOnly(2)).missed[0].directions[0].pixelCentre);
     EXPECT_TRUE(measurePcs(s, t, std::vector<PcsTriangle>{}, zOnly(64)).missed[0].directions[0].pixelCentre);
 }
 
-TEST(OracleMeasures, RefusesPcsEntriesOutsideTheScene) {
+TEST(Measures, RefusesPcsEntriesOutsideTheScene) {
     const Scene s = crossingScene();
     const Truth t = findIntersections(s);
     EXPECT_THROW(measurePcs(s, t, std::vector<PcsTriangle>{{4, 0}}, zOnly(8)), InputError);
@@ -106,4 +108,4 @@ TEST(OracleMeasures, RefusesPcsEntriesOutsideTheScene) {
 }
 
 }  // namespace
-}  // namespace cullide::oracle
+}  // namespace cullide::study

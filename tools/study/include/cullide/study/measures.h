@@ -1,4 +1,5 @@
-// How wrong a PCS is: a potentially colliding set measured against the oracle's truth.
+// How wrong a PCS is: a potentially colliding set measured against the oracle's truth (analysis
+// of a result, not truth: it lives with the studies, not in the oracle).
 //
 // Conventions
 //   - A triangle is "colliding" when it belongs to at least one intersecting pair of the truth.
@@ -32,7 +33,7 @@
 #include <span>
 #include <vector>
 
-namespace cullide::oracle {
+namespace cullide::study {
 
 struct DirectionMeasure {
     double penetration = 0;
@@ -41,7 +42,7 @@ struct DirectionMeasure {
 };
 
 struct MissedPair {
-    IntersectingPair pair;
+    oracle::IntersectingPair pair;
     bool missingA = false, missingB = false;  // which of the two triangles the PCS lacks
     std::vector<DirectionMeasure> directions;  // one per CullideOptions::directions
     double edgeOnA = 0, edgeOnB = 0;
@@ -63,7 +64,7 @@ struct PcsReport {
 
 // Measures `pcs` (entries must name triangles of `scene`: InputError("pcs", ...) otherwise) against
 // `truth` (findIntersections of the same scene), with the options of the run that produced it.
-PcsReport measurePcs(const Scene& scene, const Truth& truth, std::span<const PcsTriangle> pcs,
+PcsReport measurePcs(const Scene& scene, const oracle::Truth& truth, std::span<const PcsTriangle> pcs,
                      const CullideOptions& options);
 
-}  // namespace cullide::oracle
+}  // namespace cullide::study

@@ -1,11 +1,11 @@
 // Stability sweeps over small controlled scenes and jittered paper scenes (probes.h).
-#include "probes.h"
+#include "cullide/study/probes.h"
 
-#include "causes.h"
-#include "study.h"
+#include "cullide/study/causes.h"
+#include "cullide/study/measures.h"
+#include "cullide/study/study.h"
 
 #include "cullide/options.h"
-#include "cullide/oracle/measures.h"
 #include "cullide/raster/cpu_backend.h"
 
 #include <Eigen/Geometry>
@@ -55,7 +55,7 @@ struct Trial {
 Trial evaluate(const Scene& scene, const CullideOptions& o, DepthBackend& backend) {
     const oracle::Truth truth = oracle::findIntersections(scene);
     const Attribution a = attributeFalsePrunes(scene, truth, backend, o);
-    const oracle::PcsReport rep = oracle::measurePcs(scene, truth, a.result.pcs, o);
+    const PcsReport rep = measurePcs(scene, truth, a.result.pcs, o);
     Trial t;
     t.pcs = a.result.pcs.size();
     t.pairs = truth.pairs.size();

@@ -16,7 +16,7 @@ struct PcsCheck {
 
 // Prints one line per requested measure and returns them as JSON. --check: false prunes by class
 // (triangles and pairs), false positives, efficiency; a false prune breaks the method's promise
-// when it is a crossing pair (modified) or a pair between objects (original). --exact: the exact
+// when the method promises to keep its pair (promisesToKeep, cullide.h). --exact: the exact
 // stage on the PCS, the final intersecting pairs of the pipeline, by class.
 PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const CullideOptions& options, bool check,
                   bool exact);

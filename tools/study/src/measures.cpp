@@ -1,8 +1,10 @@
 // Measures of a PCS against the oracle's truth (see measures.h). Plain double arithmetic: these
 // numbers explain false prunes, they decide nothing.
-#include "cullide/oracle/measures.h"
+#include "cullide/study/measures.h"
 
 #include "cullide/error.h"
+
+#include "polygon.h"
 
 #include <algorithm>
 #include <array>
@@ -10,35 +12,13 @@
 #include <limits>
 #include <string>
 
-namespace cullide::oracle {
+namespace cullide::study {
+
+using oracle::IntersectingPair;
+using oracle::PairClass;
+using oracle::Truth;
+
 namespace {
-
-struct P2 {
-    double x, y;
-};
-
-double cross(const P2& o, const P2& a, const P2& b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
-
-// Sutherland-Hodgman: `poly` clipped to the counterclockwise triangle `t` (closed half-planes).
-std::vector<P2> clipToTriangle(std::vector<P2> poly, const P2 t[3]) {
-    for (int e = 0; e < 3 && !poly.empty(); ++e) {
-        const P2& a = t[e];
-        const P2& b = t[(e + 1) % 3];
-        std::vector<P2> out;
-        for (size_t i = 0; i < poly.size(); ++i) {
-            const P2& p = poly[i];
-            const P2& q = poly[(i + 1) % poly.size()];
-            const double sp = cross(a, b, p), sq = cross(a, b, q);
-            if (sp >= 0) out.push_back(p);
-            if ((sp >= 0) != (sq >= 0)) {
-                const double s = sp / (sp - sq);
-                out.push_back({p.x + s * (q.x - p.x), p.y + s * (q.y - p.y)});
-            }
-        }
-        poly = std::move(out);
-    }
-    return poly;
-}
 
 // Depth of the plane through three projected points (x, y, z) at (x, y); the triangle must have
 // non-zero projected area.
@@ -202,4 +182,4 @@ PcsReport measurePcs(const Scene& scene, const Truth& truth, std::span<const Pcs
     return r;
 }
 
-}  // namespace cullide::oracle
+}  // namespace cullide::study

@@ -58,7 +58,9 @@ struct Spec {
 // Reads a JSON spec: {"scenes": [...], "methods": [...], "resolutions": [...], "depths": [...],
 // "directions": [...], "hierarchies": [...], "leaf_sizes": [...], "backends": [...],
 // "threads": [...], "branching": B, "seed": S, "repeats": K, "oracle": true}. Scalars are accepted
-// where lists are expected. Unknown keys and bad values: InputError(source, ...).
+// where lists are expected, and a list of one where a scalar is. Every field is checked here,
+// before anything runs: an unknown key, an empty list, a wrong type or a value out of range is an
+// InputError(source, "field 'KEY': ...") (spec.cpp).
 Spec parseSpec(const nlohmann::json& j, const std::string& source);
 Spec loadSpec(const std::string& path);
 // The paper's Section 6 experiments: bunny 5k..270k and two cows 3k..270k, 500x500, D24,
@@ -90,10 +92,6 @@ struct Shard {
 };
 Shard parseShard(const std::string& text);  // InputError("option --shard", ...)
 std::vector<RunConfig> slice(const std::vector<RunConfig>& all, const Shard& shard);
-
-// Backends by name, as `cullide prune --backend` makes them: "cpu" (the reference, `threads`
-// workers, 0 = all) or "gl" (throws InputError when no GL context can be made).
-std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads);
 
 // The scene of a scene string (see the conventions) at one frame, and its frame count.
 Scene loadStudyScene(const std::string& text, uint32_t frame);

@@ -1,0 +1,52 @@
+// The depth backends by name (see backends.h); in a build without GL, the GL entry points that
+// say so.
+#include "cullide/raster/backends.h"
+
+#include "cullide/error.h"
+#include "cullide/raster/cpu_backend.h"
+#include "cullide/raster/gl_backend.h"
+
+namespace cullide::raster {
+
+const std::vector<std::string>& backendNames() {
+    static const std::vector<std::string> names{"cpu", "gl"};
+    return names;
+}
+
+bool isBackendName(const std::string& name) {
+    for (const std::string& n : backendNames())
+        if (n == name) return true;
+    return false;
+}
+
+std::string backendNameList() {
+    std::string out;
+    const std::vector<std::string>& names = backendNames();
+    for (size_t i = 0; i < names.size(); ++i)
+        out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+    return out;
+}
+
+bool glBuilt() { return CULLIDE_GL; }
+
+std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads) {
+    if (name == "cpu") {
+        CpuBackendOptions o;
+        o.threads = threads;
+        return makeCpuBackend(o);
+    }
+    if (name == "gl") return makeGlBackend();
+    throw InputError("backend", "'" + name + "': " + backendNameList());
+}
+
+#if !CULLIDE_GL
+// Built without raster/gl/ (-DCULLIDE_GL=OFF): the GL backend's entry points say so.
+std::unique_ptr<GlBackend> makeGlBackend(const GlBackendOptions&) { throw BackendUnavailable(kGlNotBuilt); }
+
+bool glBackendAvailable(std::string* why, const GlBackendOptions&) {
+    if (why) *why = kGlNotBuilt;
+    return false;
+}
+#endif
+
+}  // namespace cullide::raster
