@@ -343,21 +343,4 @@ Contact faceContact(const TrianglePoints& a, const Triangle& ia, const TriangleP
     return triangleContact(a, b);
 }
 
-int32_t integerUnit(const float* x, size_t count) {
-    int emin = 1 << 20, emax = -(1 << 20);
-    for (size_t i = 0; i < count; ++i) {
-        const uint32_t b = std::bit_cast<uint32_t>(x[i]);
-        int e = int((b >> 23) & 0xff);
-        uint32_t mant = b & 0x7fffff;
-        if (e != 0) mant |= 0x800000;
-        else e = 1;  // subnormal
-        if (mant == 0) continue;
-        // |x| = mant * 2^(e - 150): its lowest set bit, and 2^emax above |x|.
-        emin = std::min(emin, e - 150 + std::countr_zero(mant));
-        emax = std::max(emax, e - 150 + 32 - std::countl_zero(mant));
-    }
-    if (emax < emin) return 0;  // all zero
-    return emax - emin > 62 ? kNoUnit : emin;
-}
-
 }  // namespace cullide

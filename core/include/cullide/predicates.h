@@ -27,6 +27,7 @@
 #include "cullide/mesh.h"
 
 #include <array>
+#include <algorithm>
 #include <bit>
 #include <climits>
 #include <cstddef>
@@ -77,8 +78,24 @@ Contact faceContact(const TrianglePoints& a, const Triangle& ia, const TriangleP
 inline constexpr int32_t kNoUnit = INT32_MIN;
 
 // The power of two 2^unit in which all of `coordinates` are integers below 2^62 (unit: their
-// lowest set bit; 0 when all are zero), or kNoUnit when they span more than 62 bits.
-int32_t integerUnit(const float* coordinates, size_t count);
+// lowest set bit; 0 when all are zero), or kNoUnit when they span more than 62 bits. Inline: the
+// oracle's setup calls it once per triangle (nine coordinates).
+inline int32_t integerUnit(const float* coordinates, size_t count) {
+    int emin = 1 << 20, emax = -(1 << 20);
+    for (size_t i = 0; i < count; ++i) {
+        const uint32_t b = std::bit_cast<uint32_t>(coordinates[i]);
+        int e = int((b >> 23) & 0xff);
+        uint32_t mant = b & 0x7fffff;
+        if (e != 0) mant |= 0x800000;
+        else e = 1;  // subnormal
+        if (mant == 0) continue;
+        // |x| = mant * 2^(e - 150): its lowest set bit, and 2^emax above |x|.
+        emin = std::min(emin, e - 150 + std::countr_zero(mant));
+        emax = std::max(emax, e - 150 + 32 - std::countl_zero(mant));
+    }
+    if (emax < emin) return 0;  // all zero
+    return emax - emin > 62 ? kNoUnit : emin;
+}
 
 // 2^-unit, the scale that takes coordinates to integers of 2^unit (unit from integerUnit).
 inline double unitScale(int32_t unit) { return std::bit_cast<double>(uint64_t(1023 - unit) << 52); }
