@@ -11,6 +11,7 @@
 #include "cullide/options.h"
 #include "cullide/raster/backends.h"
 #include "cullide/scene_io.h"
+#include "cullide/study/study.h"
 
 #include <nlohmann/json.hpp>
 

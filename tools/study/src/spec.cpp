@@ -60,14 +60,15 @@ public:
         return v.is_number() ? std::to_string(integer(v, key, lo, hi)) : text(v, key);
     }
 
-    // Runs a core parser on a value, its InputError restated as the field's.
+    // Runs a core parser on a value, its InputError restated as the field's: the same cause that
+    // `prune` gives for the same value (options.h).
     template <typename Parse>
     void check(const std::string& key, const std::string& value, Parse parse) const {
         try {
             (void)parse(value);
         } catch (const InputError& e) {
             const std::string what = e.what();
-            fail(key, "'" + value + "': " + what.substr(std::min(what.size(), e.source().size() + 2)));
+            fail(key, what.substr(std::min(what.size(), e.source().size() + 2)));  // the parser's own cause
         }
     }
 
@@ -119,7 +120,7 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
             s.leafSizes = r.integers<uint32_t>(v, key, 1, kMaxLeafSize);
         } else if (key == "backends") {
             s.backends = r.texts(v, key, [](const std::string& b) {
-                if (!raster::isBackendName(b)) throw InputError("backend", raster::backendNameList());
+                if (!raster::isBackendName(b)) throw InputError("backend", "'" + b + "': " + raster::backendNameList());
                 return 0;
             });
         } else if (key == "threads") {
