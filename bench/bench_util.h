@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-// The self variant's reducePCS (the seed paper's Figure 3), both passes, one direction, as one
+// The self variant's reducePCS (the seed paper's Figure 3, docs/paper.md#figure-3), both passes, one direction, as one
 // command list, over consecutive objects of `perObject` triangles (0: the whole mesh).
 inline cullide::CommandList reducePcsList(uint32_t triangles, uint32_t perObject) {
     if (perObject == 0) perObject = triangles;

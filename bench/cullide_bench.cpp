@@ -3,7 +3,7 @@
 //   BM_Prune/<scene>/<triangles>/<method>/<threads>: one full `cullide prune` of a frame: world
 //     meshes, hierarchies (connectivity, leaf 16, branching 4), geometry upload and every
 //     reducePCS call (six axis directions, 500 x 500, D24), as the paper measures it (its
-//     Figure 8: bunny 20-600 ms, cows 35-1000 ms for 5k-270k triangles on a 2004 GPU).
+//     Figure 8: bunny 5k-270k in 20-600 ms, cows 3k-270k in 35-1000 ms on a 2003 GPU; docs/paper.md#figures-8-12).
 //     scene 0 = the deformed bunny (make-scene bunny), 1 = two cows merged into one object
 //     (make-scene cows); method 0 = original, 1 = modified. Counters: PCS triangles, reducePCS
 //     calls, triangles rendered, queries.

@@ -1,5 +1,5 @@
 // Cullide (Govindaraju et al. 2003) and the seed paper's self-intersection variant: Figures 1-3
-// of ../shared/papers/000_7db8250a290ddd48.txt, on any DepthBackend. See cullide.h.
+// of the seed paper (docs/paper.md#figure-1, #figure-2, #figure-3), on any DepthBackend. See cullide.h.
 #include "cullide/cullide.h"
 
 #include "reliable.h"

@@ -1,6 +1,6 @@
 // Per-frame hierarchies of sub-objects for Cullide.
 //
-// References: the seed paper (../shared/papers/000_7db8250a290ddd48.txt), Section 6.1 (random vs
+// References: the seed paper (docs/paper.md#section-6-1), Section 6.1 (random vs
 // connectivity-based hierarchies); CULLIDE (Govindaraju et al. 2003), Section 4 (sub-objects).
 // The connectivity split is recursive graph-growing bisection on the face-adjacency graph (the
 // breadth-first "graph growing" of METIS' initial partitioning, Karypis and Kumar 1998), from a

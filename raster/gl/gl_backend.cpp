@@ -4,7 +4,7 @@
 // References: the OpenGL 4.5/4.6 core specification (§13.8.1 viewport and glClipControl, §14.6.1
 // polygon rasterization, §17.3.4 depth test, §4.2 occlusion queries, ARB_query_buffer_object);
 // Cullide (Govindaraju et al., Graphics Hardware 2003) and the self-intersection variant in
-// /work/shared/papers/000_7db8250a290ddd48.txt, whose queries this backend executes.
+// the seed paper (docs/paper.md#figure-3), whose queries this backend executes.
 #include "cullide/raster/gl_backend.h"
 
 #include "egl_context.h"

@@ -5,7 +5,7 @@
 // ch. 42 (overestimating coverage; depth over a partly covered pixel clamped to the primitive's
 // range); the D3D12 / Vulkan overestimation rules (closed pixel squares, degenerate triangles
 // still rasterized); Govindaraju, Lin, Manocha, R-CULLIDE (VRST 2004: dilate so that no overlap
-// is lost); /work/shared/notes/literature.md (the interval sketch the reliable method follows).
+// is lost); docs/paper.md#related-work (the interval sketch the reliable method follows).
 //
 // What is guaranteed (the error analysis is in conservative.cpp): let T be a triangle of the
 // geometry and W the exact (real-number) window map of the view. For every point x of T whose

@@ -2,7 +2,7 @@
 // with oneTBB, deterministic (bit-identical results for any thread count).
 //
 // References: Govindaraju, Redon, Lin, Manocha, CULLIDE (Graphics Hardware 2003) and the seed
-// paper /work/shared/papers/000_7db8250a290ddd48.txt (Sections 3-5): what a backend must do.
+// paper (Sections 3-5, docs/paper.md#section-3 ff.): what a backend must do.
 // Mesa llvmpipe (lp_rast, lp_setup): 64x64 tiles, binning, per-tile in-order execution,
 // per-thread occlusion counters summed at the end. Rules: cullide/raster/rules.h.
 //

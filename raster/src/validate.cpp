@@ -4,7 +4,7 @@
 // depth plane, storage), for triangles that need no clipping; a triangle that needs clipping is
 // treated as ambiguous over its bounding box (Cullide's fitted views never clip). References:
 // the dEQP rasterization verifier (FULL / PARTIAL / NONE pixels, floor/ceil snapping of every
-// vertex), /work/shared/notes/gl-rules.md.
+// vertex), docs/gl-rules.md#deqp.
 #include "cullide/raster/validate.h"
 
 #include "command_state.h"

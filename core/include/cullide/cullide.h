@@ -5,7 +5,7 @@
 //   - N. Govindaraju, S. Redon, M. Lin, D. Manocha: CULLIDE: Interactive collision detection
 //     between complex models in large environments using graphics hardware. Graphics Hardware
 //     2003. ("original": Figure 2 of the seed paper.)
-//   - The seed paper, ../shared/papers/000_7db8250a290ddd48.txt: Figures 1 (the loop), 2
+//   - The seed paper (summarised in docs/paper.md#figure-1 ff.): Figures 1 (the loop), 2
 //     (original reducePCS) and 3 (modified reducePCS, which keeps self-intersecting objects).
 //
 // Conventions

@@ -1,4 +1,4 @@
-// Hierarchies of sub-objects, built per frame with no preprocessing (the seed paper, Section 6:
+// Hierarchies of sub-objects, built per frame with no preprocessing (the seed paper, Section 6.1:
 // "a hierarchy built on mesh connectivity ... improved performance significantly" over a random
 // one). The hierarchy changes how fast Cullide prunes, never what it may prune.
 //

@@ -7,7 +7,7 @@
 //     vertices, which we follow so that both can be compared pair for pair).
 //   - The broad phase: a uniform grid of float boxes, one per triangle (docs/oracle.md); Embree 3
 //     rtcCollide (user geometry) finds the same pairs and is kept beside it.
-//   - ../shared/notes/oracle.md; the full rules are in docs/oracle.md.
+//   - docs/oracle.md: the full rules, and why these parts (docs/oracle.md#background).
 //
 // Conventions
 //   - The oracle decides on exactly the coordinates the culler uses: Scene::worldMesh(i), in

@@ -1,7 +1,7 @@
 // The CPU reference backend: a deterministic software GL depth buffer with occlusion queries.
 //
 // Exactly what Cullide asks of a GPU (Govindaraju et al., CULLIDE, Graphics Hardware 2003; the
-// self-intersection variant in /work/shared/papers/000_7db8250a290ddd48.txt, Sections 3-5):
+// self-intersection variant of the seed paper, Sections 3-5, docs/paper.md#section-3 ff.):
 // depth-only orthographic rasterization, the eight depth functions, a depth mask, clears and
 // SAMPLES_PASSED / ANY_SAMPLES_PASSED queries. The rules (subpixel snapping, fill rule, depth
 // interpolation, unorm rounding, clipping) are in cullide/raster/rules.h.

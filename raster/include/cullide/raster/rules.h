@@ -9,7 +9,7 @@
 // rasterization, §17.3.4 depth test, §2.3.5.2 unorm conversion); Mesa llvmpipe (lp_setup_tri.c:
 // 8 subpixel bits, 64-bit edge functions, bottom-left fill rule for FBOs, float depth plane from
 // the unsnapped vertices); dEQP's reference rasterizer (64-bit integer edge functions, float
-// depth plane, clamp, round to n bits). /work/shared/notes/gl-rules.md summarizes them.
+// depth plane, clamp, round to n bits). docs/gl-rules.md summarizes them.
 //
 // Conventions (GL window coordinates, see depth_backend.h)
 //   - x right, y up, origin at the bottom-left corner of the viewport; pixel (i, j) covers

@@ -2,7 +2,7 @@
 // and a tee that runs one Cullide workload on the reference, another backend (GL) and the
 // interval evaluator at once, comparing every query. `cullide validate` is built on it.
 //
-// The approach is the conformance suite's (dEQP, see /work/shared/notes/gl-rules.md): a fragment
+// The approach is the conformance suite's (dEQP, see docs/gl-rules.md#deqp): a fragment
 // is *certain* when it passes in the reference under every allowed implementation freedom, and
 // *ambiguous* when it might go either way:
 //   - coverage: the pixel centre lies within a few subpixels of an edge under any snapping of the

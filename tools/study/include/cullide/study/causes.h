@@ -1,5 +1,5 @@
 // Why a false prune happened: every colliding triangle Cullide dropped, attributed to one of the
-// causes of the seed paper's Section 5 (../shared/papers/000_7db8250a290ddd48.txt), decided per
+// causes of the seed paper's Section 5 (docs/paper.md#section-5), decided per
 // pair in the view of the very reducePCS call that dropped it.
 //
 // Conventions (full rules and their derivation: docs/studies.md)

@@ -1,5 +1,5 @@
 // Stability where image-space culling fails: four sweeps over small controlled scenes (the seed
-// paper's Section 5, ../shared/papers/000_7db8250a290ddd48.txt, Figure 5), and the jitter of the
+// paper's Section 5, docs/paper.md#figure-5), and the jitter of the
 // paper's scenes. Each returns one flat JSON row per trial (written as CSV by `cullide study
 // --stability`; charted by tools/plot.py).
 //

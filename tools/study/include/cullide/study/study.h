@@ -63,7 +63,7 @@ struct Spec {
 // InputError(source, "field 'KEY': ...") (spec.cpp).
 Spec parseSpec(const nlohmann::json& j, const std::string& source);
 Spec loadSpec(const std::string& path);
-// The paper's Section 6 experiments: bunny 5k..270k and two cows 3k..270k, 500x500, D24,
+// The paper's Section 6 experiments (docs/paper.md#section-6): bunny 5k..270k, two cows 3k..270k, 500x500, D24,
 // modified, axes, connectivity leaf 16; `repeats` timed runs each.
 Spec paperPreset(int repeats = 3);
 
