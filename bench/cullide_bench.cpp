@@ -54,8 +54,12 @@ void BM_Hierarchy(benchmark::State& state) {
     o.kind = state.range(0) == 0 ? HierarchyKind::Connectivity : HierarchyKind::Random;
     const Mesh& mesh = scene.objects[0].mesh;
     for (auto _ : state) benchmark::DoNotOptimize(buildHierarchy(mesh, o));
-    state.counters["Mtri/s"] = benchmark::Counter(double(mesh.triangleCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["Mtri/s"] =
+        benchmark::Counter(double(mesh.triangleCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_Hierarchy)->ArgNames({"kind", "tris"})->ArgsProduct({{0, 1}, {5000, 270000}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Hierarchy)
+    ->ArgNames({"kind", "tris"})
+    ->ArgsProduct({{0, 1}, {5000, 270000}})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -32,7 +32,9 @@ namespace {
 using namespace cullide;
 using Clock = std::chrono::steady_clock;
 
-double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+double msSince(Clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
 
 // The process's one GL backend, or null after marking the benchmark skipped with the reason.
 raster::GlBackend* sharedGlOrSkip(benchmark::State& state) {
@@ -61,8 +63,8 @@ void BM_CpuVsGl_ReducePcs(benchmark::State& state) {
     const Mesh& mesh = benchMesh(int(state.range(0)));
     const uint32_t all = uint32_t(mesh.triangleCount());
     const TriangleRange range{0, all};
-    const OrthoView view = fitView(mesh.positions, mesh.triangles, std::span(&range, 1), Vec3d(0, 0, 1), 500, 500,
-                                   DepthFormat::unorm(24));
+    const OrthoView view =
+        fitView(mesh.positions, mesh.triangles, std::span(&range, 1), Vec3d(0, 0, 1), 500, 500, DepthFormat::unorm(24));
     const CommandList list = reducePcsList(all, uint32_t(state.range(1)));
     auto cpu = raster::makeCpuBackend();
     cpu->setGeometry(mesh.positions, mesh.triangles);
@@ -123,6 +125,11 @@ void BM_CpuVsGl_Prune(benchmark::State& state) {
     state.counters["pcs"] = double(cr.pcs.size());
     state.counters["pcs_equal"] = cr.pcs == gr.pcs ? 1 : 0;
 }
-BENCHMARK(BM_CpuVsGl_Prune)->ArgName("scene")->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
+BENCHMARK(BM_CpuVsGl_Prune)
+    ->ArgName("scene")
+    ->DenseRange(0, 1)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(2)
+    ->UseRealTime();
 
 }  // namespace

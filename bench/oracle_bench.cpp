@@ -66,7 +66,7 @@ bool samePairs(int which) {
     if (it != cache.end()) return it->second;
     const Mesh& m = benchMesh(which);
     const bool same = oracle::selfPairsOf(oracle::findIntersections(sceneOf(m)), 0) ==
-                      oracle::CgalSelfIntersections(m, "bench mesh").run(false);
+        oracle::CgalSelfIntersections(m, "bench mesh").run(false);
     return cache.emplace(which, same).first->second;
 }
 
@@ -109,9 +109,16 @@ void BM_Oracle(benchmark::State& state) {
 
 BENCHMARK(BM_Oracle)
     ->ArgNames({"mesh", "impl", "threads"})
-    ->Args({0, 0, 2})->Args({0, 0, 1})->Args({0, 1, 1})
-    ->Args({1, 0, 2})->Args({1, 0, 1})->Args({1, 1, 1})
-    ->Args({2, 0, 2})->Args({2, 0, 1})->Args({2, 1, 1})->Args({2, 2, 2})
+    ->Args({0, 0, 2})
+    ->Args({0, 0, 1})
+    ->Args({0, 1, 1})
+    ->Args({1, 0, 2})
+    ->Args({1, 0, 1})
+    ->Args({1, 1, 1})
+    ->Args({2, 0, 2})
+    ->Args({2, 0, 1})
+    ->Args({2, 1, 1})
+    ->Args({2, 2, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -75,15 +75,14 @@ void BM_Triangles(benchmark::State& state) {
     list.draw(0, uint32_t(count));
     for (auto _ : state) benchmark::DoNotOptimize(backend->execute(list));
     state.counters["Mtri/s"] = benchmark::Counter(double(count) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
-    state.counters["Mfrag/s"] = benchmark::Counter(double(backend->lastStats().fragments) / 1e6,
-                                                   benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["Mfrag/s"] =
+        benchmark::Counter(double(backend->lastStats().fragments) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_Triangles)
     ->ArgNames({"leg", "W", "threads"})
     ->ArgsProduct({{1, 10, 100}, {500, 1024}, {1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
-
 
 // Orthographic view along +z fitted to the mesh's bounds, with a 1% margin on every side (so
 // no vertex lands exactly on the far plane and gets clipped by rounding).

@@ -58,7 +58,8 @@ void BM_ReliableCost(benchmark::State& state) {
     state.counters["triangles"] = double(s.triangleCount());
     state.counters["pcs"] = double(r.pcs.size());
     state.counters["colliding"] = double(rep.collidingTriangles);
-    state.counters["pcs_per_exact"] = rep.collidingTriangles ? double(r.pcs.size()) / double(rep.collidingTriangles) : 0.0;
+    state.counters["pcs_per_exact"] =
+        rep.collidingTriangles ? double(r.pcs.size()) / double(rep.collidingTriangles) : 0.0;
     state.counters["false_prunes"] = double(rep.falsePruneCount());
     state.counters["false_pos"] = double(rep.falsePositives);
     state.counters["rendered"] = double(rendered);

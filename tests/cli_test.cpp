@@ -185,14 +185,22 @@ TEST(Cli, MakeSceneWithBadMeshWritesNothing) {
 TEST(Cli, PruneRefusesBadOptions) {
     const std::string scene = quote(kData + "/meshes/cow.off");
     const std::pair<std::string, std::string> cases[] = {
-        {"--resolution 0", "--resolution"},        {"--resolution 20000", "--resolution"},
-        {"--resolution 10x", "--resolution"},      {"--resolution axb", "--resolution"},
-        {"--depth 7", "--depth"},                  {"--depth 33", "--depth"},
-        {"--depth half", "--depth"},               {"--directions '0 0 0'", "--directions"},
-        {"--directions x,w", "--directions"},      {"--directions 0", "--directions"},
-        {"--method reliable-ish", "--method"},     {"--hierarchy octree", "--hierarchy"},
-        {"--leaf-size 0", "--leaf-size"},          {"--branching 1", "--branching"},
-        {"--threads -1", "--threads"},             {"--frame 3", "--frame"},
+        {"--resolution 0", "--resolution"},
+        {"--resolution 20000", "--resolution"},
+        {"--resolution 10x", "--resolution"},
+        {"--resolution axb", "--resolution"},
+        {"--depth 7", "--depth"},
+        {"--depth 33", "--depth"},
+        {"--depth half", "--depth"},
+        {"--directions '0 0 0'", "--directions"},
+        {"--directions x,w", "--directions"},
+        {"--directions 0", "--directions"},
+        {"--method reliable-ish", "--method"},
+        {"--hierarchy octree", "--hierarchy"},
+        {"--leaf-size 0", "--leaf-size"},
+        {"--branching 1", "--branching"},
+        {"--threads -1", "--threads"},
+        {"--frame 3", "--frame"},
         {"--backend vulkan", "--backend"},
     };
     for (const auto& [args, needle] : cases) {
@@ -282,9 +290,16 @@ TEST(Cli, StudySpecMutationsAreRefusedByName) {
     ASSERT_EQ(ok.status, 0) << ok.output;
 
     const nlohmann::json huge = nlohmann::json::parse("18446744073709551616");  // beyond uint64: a float
-    const std::vector<nlohmann::json> mutations = {nlohmann::json::object({{"a", 1}}), nlohmann::json::array(),
-                                                   nlohmann::json::array({nlohmann::json::array()}), true, 2.5,
-                                                   -1, 4294967297LL, 1e300, huge, ""};
+    const std::vector<nlohmann::json> mutations = {nlohmann::json::object({{"a", 1}}),
+                                                   nlohmann::json::array(),
+                                                   nlohmann::json::array({nlohmann::json::array()}),
+                                                   true,
+                                                   2.5,
+                                                   -1,
+                                                   4294967297LL,
+                                                   1e300,
+                                                   huge,
+                                                   ""};
     size_t refused = 0;
     for (const auto& [key, value] : valid.items()) {
         for (const nlohmann::json& m : mutations) {

@@ -81,10 +81,10 @@ TEST(ConservativeRules, DepthRoundsOutwardForEveryFormat) {
 // Trap: a fragment that spans exactly the stored interval's end must conflict (touching counts);
 // strictly in front or strictly behind must not.
 TEST(ConservativeRules, ConflictIsOverlapOfClosedIntervals) {
-    EXPECT_TRUE(intervalConflicts(5, 10, 10, 20));   // touches the stored lo
+    EXPECT_TRUE(intervalConflicts(5, 10, 10, 20));  // touches the stored lo
     EXPECT_TRUE(intervalConflicts(20, 30, 10, 20));  // touches the stored hi
-    EXPECT_FALSE(intervalConflicts(5, 9, 10, 20));   // strictly in front
-    EXPECT_FALSE(intervalConflicts(21, 30, 10, 20)); // strictly behind
+    EXPECT_FALSE(intervalConflicts(5, 9, 10, 20));  // strictly in front
+    EXPECT_FALSE(intervalConflicts(21, 30, 10, 20));  // strictly behind
     EXPECT_FALSE(intervalConflicts(0, 0xfffffffeu, kEmptyIntervalLo, kEmptyIntervalHi));  // empty pixel
 }
 
@@ -98,7 +98,8 @@ TEST(ConservativeCoverage, VertexOnAPixelCornerTouchesFourPixels) {
     g.tri({2, 2, 0.5f}, {0.25f, 2, 0.5f}, {2, 0.25f, 0.5f});  // lower-left of corner (2, 2)
     auto b = backendFor(g, windowView(8, 8));
     const auto px = coverage(*b, 0);
-    for (auto p : {std::pair{1, 1}, std::pair{2, 2}, std::pair{1, 2}, std::pair{2, 1}, std::pair{0, 1}, std::pair{1, 0}})
+    for (auto p :
+         {std::pair{1, 1}, std::pair{2, 2}, std::pair{1, 2}, std::pair{2, 1}, std::pair{0, 1}, std::pair{1, 0}})
         EXPECT_TRUE(px.count(p)) << p.first << "," << p.second;
     EXPECT_FALSE(px.count({3, 3}));  // one pixel beyond the dilation
     EXPECT_FALSE(px.count({2, 3}));
@@ -192,9 +193,9 @@ TEST(ConservativeCoverage, FarFromTheOriginStillContainsTheTriangle) {
 // its whole depth range, so a triangle crossing it conflicts.
 TEST(ConservativeCoverage, EdgeOnTriangleConflictsWithACrossingOne) {
     Geo g;
-    g.tri({4, 1, 0.2f}, {4, 7, 0.2f}, {4, 4, 0.8f});                 // edge-on: the plane x = 4
-    g.tri({1, 3.5f, 0.5f}, {7, 3.5f, 0.5f}, {1, 4.5f, 0.5f});       // crosses it at depth 0.5
-    g.tri({1, 3.5f, 0.9f}, {7, 3.5f, 0.9f}, {1, 4.5f, 0.9f});       // behind it everywhere
+    g.tri({4, 1, 0.2f}, {4, 7, 0.2f}, {4, 4, 0.8f});  // edge-on: the plane x = 4
+    g.tri({1, 3.5f, 0.5f}, {7, 3.5f, 0.5f}, {1, 4.5f, 0.5f});  // crosses it at depth 0.5
+    g.tri({1, 3.5f, 0.9f}, {7, 3.5f, 0.9f}, {1, 4.5f, 0.9f});  // behind it everywhere
     auto b = backendFor(g, windowView(8, 8));
     CommandList l;
     l.clearIntervals();
@@ -215,8 +216,8 @@ TEST(ConservativeCoverage, EdgeOnTriangleConflictsWithACrossingOne) {
 // Trap: two triangles sharing only a vertex always conflict at the pixel of that vertex, in any
 // depth format: the reason adjacent triangles must be kept out of each other's tests.
 TEST(ConservativeCoverage, TrianglesSharingAVertexAlwaysConflict) {
-    for (const DepthFormat& f : {DepthFormat::unorm(8), DepthFormat::unorm(16), DepthFormat::unorm(32),
-                                 DepthFormat::float32()}) {
+    for (const DepthFormat& f :
+         {DepthFormat::unorm(8), DepthFormat::unorm(16), DepthFormat::unorm(32), DepthFormat::float32()}) {
         Geo g;
         g.tri({3.3f, 3.7f, 0.5f}, {0.2f, 3.7f, 0.1f}, {3.3f, 0.4f, 0.1f});
         g.tri({3.3f, 3.7f, 0.5f}, {7.2f, 3.7f, 0.9f}, {3.3f, 7.4f, 0.9f});
@@ -239,8 +240,8 @@ TEST(ConservativeContract, SampledPointsLieInCoveredPixelsAndIntervals) {
     std::mt19937_64 rng(11);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     const int W = 32, H = 32;
-    for (const DepthFormat& f : {DepthFormat::unorm(8), DepthFormat::unorm(24), DepthFormat::unorm(32),
-                                 DepthFormat::float32()}) {
+    for (const DepthFormat& f :
+         {DepthFormat::unorm(8), DepthFormat::unorm(24), DepthFormat::unorm(32), DepthFormat::float32()}) {
         for (int trial = 0; trial < 300; ++trial) {
             Geo g;
             Vec3f p[3];
@@ -261,16 +262,21 @@ TEST(ConservativeContract, SampledPointsLieInCoveredPixelsAndIntervals) {
                 if (a + c > 1) a = 1 - a, c = 1 - c;
                 if (s < 3) a = s == 1, c = s == 2;  // the vertices themselves
                 // In long double: the exact point to ~1e-19, far below every bound.
-                const long double x = p[0].x() + a * ((long double)p[1].x() - p[0].x()) + c * ((long double)p[2].x() - p[0].x());
-                const long double y = p[0].y() + a * ((long double)p[1].y() - p[0].y()) + c * ((long double)p[2].y() - p[0].y());
-                const long double z = p[0].z() + a * ((long double)p[1].z() - p[0].z()) + c * ((long double)p[2].z() - p[0].z());
+                const long double x =
+                    p[0].x() + a * ((long double)p[1].x() - p[0].x()) + c * ((long double)p[2].x() - p[0].x());
+                const long double y =
+                    p[0].y() + a * ((long double)p[1].y() - p[0].y()) + c * ((long double)p[2].y() - p[0].y());
+                const long double z =
+                    p[0].z() + a * ((long double)p[1].z() - p[0].z()) + c * ((long double)p[2].z() - p[0].z());
                 const int i = std::min(int(std::floor(x)), W - 1), j = std::min(int(std::floor(y)), H - 1);
                 if (i < 0 || j < 0) continue;
                 ASSERT_TRUE(img.covered(i, j)) << f.name() << " trial " << trial << " pixel " << i << "," << j;
                 const size_t k = size_t(j) * W + size_t(i);
-                ASSERT_LE((long double)codeValue(img.lo[k], f), std::max<long double>(0, std::min<long double>(1, z)) + 1e-18L)
+                ASSERT_LE((long double)codeValue(img.lo[k], f),
+                          std::max<long double>(0, std::min<long double>(1, z)) + 1e-18L)
                     << f.name() << " trial " << trial;
-                ASSERT_GE((long double)codeValue(img.hi[k], f), std::max<long double>(0, std::min<long double>(1, z)) - 1e-18L)
+                ASSERT_GE((long double)codeValue(img.hi[k], f),
+                          std::max<long double>(0, std::min<long double>(1, z)) - 1e-18L)
                     << f.name() << " trial " << trial;
             }
         }
@@ -345,7 +351,8 @@ TEST(ConservativeDifferential, FastPathEqualsScalarReference) {
             CpuBackendOptions fast, ref;
             fast.tileSize = 16;
             ref.scalarReference = true;
-            expectSame(runRandom(seed, v, fast), runRandom(seed, v, ref), "seed " + std::to_string(seed) + " " + f.name());
+            expectSame(runRandom(seed, v, fast), runRandom(seed, v, ref),
+                       "seed " + std::to_string(seed) + " " + f.name());
         }
 }
 

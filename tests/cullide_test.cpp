@@ -24,17 +24,15 @@ using cullide::test::sceneOf;
 
 namespace {
 
-
-
 // A unit icosphere subdivided `levels` times (20 * 4^levels triangles), closed, no self-intersection.
 Mesh icosphere(int levels) {
     const float t = float((1.0 + std::sqrt(5.0)) / 2.0);
     Mesh m;
-    m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                   {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-    m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+    m.positions = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                   {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+    m.triangles = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                   {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+                   {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
     for (auto& p : m.positions) p.normalize();
     for (int l = 0; l < levels; ++l) {
         std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
@@ -74,7 +72,9 @@ Mesh selfCrossingRibbon(int segments) {
 // Exact-enough (double, generic configurations only) test whether two triangles cross: some
 // edge of one passes through the interior of the other. For the hand-built scenes here, whose
 // crossings are far from degenerate; the exact oracle is the real judge.
-double orient(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) { return (b - a).cross(c - a).dot(d - a); }
+double orient(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+    return (b - a).cross(c - a).dot(d - a);
+}
 bool edgeCrosses(const Vec3d& p, const Vec3d& q, const std::array<Vec3d, 3>& t) {
     const double sp = orient(t[0], t[1], t[2], p), sq = orient(t[0], t[1], t[2], q);
     if (sp * sq >= 0) return false;
@@ -115,8 +115,8 @@ std::set<PcsTriangle> crossingTriangles(const Scene& scene) {
     return out;
 }
 
-CullideResult prune(const Scene& scene, CullMethod method, uint32_t leafSize, HierarchyKind kind = HierarchyKind::Connectivity,
-                    int threads = 0, int resolution = 256) {
+CullideResult prune(const Scene& scene, CullMethod method, uint32_t leafSize,
+                    HierarchyKind kind = HierarchyKind::Connectivity, int threads = 0, int resolution = 256) {
     raster::CpuBackendOptions bo;
     bo.threads = threads;
     auto backend = raster::makeCpuBackend(bo);
@@ -160,8 +160,8 @@ TEST(Cullide, InterpenetratingBoxesKeepCrossingTriangles) {
     for (CullMethod m : {CullMethod::Original, CullMethod::Modified})
         for (HierarchyKind k : {HierarchyKind::Connectivity, HierarchyKind::Random}) {
             const CullideResult r = prune(s, m, 1, k);
-            EXPECT_TRUE(contains(r, truth)) << toString(m) << "/" << toString(k) << ": PCS " << r.pcs.size()
-                                            << ", crossing " << truth.size();
+            EXPECT_TRUE(contains(r, truth))
+                << toString(m) << "/" << toString(k) << ": PCS " << r.pcs.size() << ", crossing " << truth.size();
             EXPECT_LT(r.pcs.size(), 24u) << "something was pruned at all";
         }
 }

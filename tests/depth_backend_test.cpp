@@ -47,7 +47,8 @@ TEST(OrthoView, ToWindowMapsTheBoxToTheViewport) {
     v.width = 400;
     v.height = 100;
     v.validate();
-    const Vec3d lo = v.toWindow(Vec3f(-2, 0, 10)), hi = v.toWindow(Vec3f(2, 1, 20)), mid = v.toWindow(Vec3f(0, 0.5f, 15));
+    const Vec3d lo = v.toWindow(Vec3f(-2, 0, 10)), hi = v.toWindow(Vec3f(2, 1, 20)),
+                mid = v.toWindow(Vec3f(0, 0.5f, 15));
     EXPECT_EQ(lo, Vec3d(0, 0, 0));
     EXPECT_EQ(hi, Vec3d(400, 100, 1));
     EXPECT_EQ(mid, Vec3d(200, 50, 0.5));
@@ -55,8 +56,8 @@ TEST(OrthoView, ToWindowMapsTheBoxToTheViewport) {
 
 // Trap: a frame that is not right-handed or not orthonormal for directions near the axes.
 TEST(OrthoView, LookingBuildsARightHandedOrthonormalFrame) {
-    for (const Vec3d& d : {Vec3d(0, 0, 1), Vec3d(0, 0, -1), Vec3d(1, 0, 0), Vec3d(0, -3, 0), Vec3d(1, 2, 3),
-                           Vec3d(-1e-9, 1, 1e-9)}) {
+    for (const Vec3d& d :
+         {Vec3d(0, 0, 1), Vec3d(0, 0, -1), Vec3d(1, 0, 0), Vec3d(0, -3, 0), Vec3d(1, 2, 3), Vec3d(-1e-9, 1, 1e-9)}) {
         OrthoView v = OrthoView::looking(d);
         EXPECT_NO_THROW(v.validate());
         EXPECT_NEAR((v.dir - d.normalized()).norm(), 0.0, 1e-15);
@@ -116,7 +117,9 @@ struct TwoQuads : test::Geo {
     }
 };
 
-OrthoView box4() { return test::windowView(4, 4); }
+OrthoView box4() {
+    return test::windowView(4, 4);
+}
 
 // Trap: execute() running part of a list before finding a bad draw range or an open query.
 TEST(DepthBackend, ExecuteValidatesBeforeRunning) {

@@ -30,17 +30,19 @@ namespace {
 // index are not counted.
 struct Intersections {
     std::vector<std::pair<uint32_t, uint32_t>> pairs;  // i < j, sorted
-    Bounds box;                               // of the triangles in `pairs`
+    Bounds box;  // of the triangles in `pairs`
 };
 
-Vec3d dvec(const Vec3f& p) { return {double(p.x()), double(p.y()), double(p.z())}; }
+Vec3d dvec(const Vec3f& p) {
+    return {double(p.x()), double(p.y()), double(p.z())};
+}
 
 // Does segment pq cross the interior of triangle abc, by more than `tol` (a length) on every
 // side? Touching and coplanar contacts do not count: with float inputs they are rounding noise
 // (a subdivision midpoint is off its edge by up to half an ulp), and a real crossing of two
 // surfaces always has some pair that crosses properly.
-bool segmentCrossesTriangle(const Vec3d& p, const Vec3d& q, const Vec3d& a,
-                                   const Vec3d& b, const Vec3d& c, double tol) {
+bool segmentCrossesTriangle(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                            double tol) {
     const Vec3d n = (b - a).cross(c - a);
     const double len = n.norm();
     if (len == 0) return false;  // degenerate triangle
@@ -164,9 +166,13 @@ void assertValid(const Animation& a, size_t frames, const char* name) {
     EXPECT_NO_THROW(validateAnimation(a, name));
 }
 
-double diagonal(const Bounds& b) { return double(b.extent().norm()); }
+double diagonal(const Bounds& b) {
+    return double(b.extent().norm());
+}
 
-size_t off(size_t a, size_t b) { return a > b ? a - b : b - a; }
+size_t off(size_t a, size_t b) {
+    return a > b ? a - b : b - a;
+}
 
 // Bit patterns, so that -0 != +0 and NaN == NaN: "same bytes", not "same values".
 std::vector<uint32_t> bits(const Mesh& m) {
@@ -255,11 +261,11 @@ TEST(GeneratorsSubdivide, DeterministicVertexNumbering) {
     const Mesh s = subdivide(quad);
     ASSERT_EQ(s.vertexCount(), 9u);
     for (size_t i = 0; i < 4; ++i) EXPECT_EQ(s.positions[i], quad.positions[i]);
-    EXPECT_EQ(s.positions[4], Vec3f(0.5f, 0, 0));     // 0-1
-    EXPECT_EQ(s.positions[5], Vec3f(1, 0.5f, 0));     // 1-2
+    EXPECT_EQ(s.positions[4], Vec3f(0.5f, 0, 0));  // 0-1
+    EXPECT_EQ(s.positions[5], Vec3f(1, 0.5f, 0));  // 1-2
     EXPECT_EQ(s.positions[6], Vec3f(0.5f, 0.5f, 0));  // 2-0, reused by triangle 1 as 0-2
-    EXPECT_EQ(s.positions[7], Vec3f(0.5f, 1, 0.25f)); // 2-3
-    EXPECT_EQ(s.positions[8], Vec3f(0, 0.5f, 0.25f)); // 3-0
+    EXPECT_EQ(s.positions[7], Vec3f(0.5f, 1, 0.25f));  // 2-3
+    EXPECT_EQ(s.positions[8], Vec3f(0, 0.5f, 0.25f));  // 3-0
     EXPECT_EQ(s.triangles[4], (Triangle{0, 6, 8}));
     EXPECT_EQ(s.triangles[7], (Triangle{6, 7, 8}));
 }

@@ -28,12 +28,12 @@ const std::string& glUnavailableReason() {
     return why;
 }
 
-#define GL_OR_SKIP()                                                                              \
-    do {                                                                                          \
-        if (!glUnavailableReason().empty()) {                                                     \
-            if (std::getenv("CULLIDE_REQUIRE_GL")) FAIL() << "no GL: " << glUnavailableReason();  \
+#define GL_OR_SKIP()                                                                             \
+    do {                                                                                         \
+        if (!glUnavailableReason().empty()) {                                                    \
+            if (std::getenv("CULLIDE_REQUIRE_GL")) FAIL() << "no GL: " << glUnavailableReason(); \
             GTEST_SKIP() << "no GL context: " << glUnavailableReason();                          \
-        }                                                                                         \
+        }                                                                                        \
     } while (0)
 
 // An axis-aligned quad at constant world z as two triangles (world = window in the views below).
@@ -55,7 +55,9 @@ OrthoView identityView(int w, int h, const DepthFormat& f) {
 
 class GlFormats : public ::testing::TestWithParam<DepthFormat> {};
 
-std::string formatName(const ::testing::TestParamInfo<DepthFormat>& info) { return info.param.name(); }
+std::string formatName(const ::testing::TestParamInfo<DepthFormat>& info) {
+    return info.param.name();
+}
 
 // Trap: anything in the GL path that is not one-to-one with the reference where the rules leave no
 // freedom: the window transform (y flip, half-pixel offsets), depth conversion of binary-fraction
@@ -67,10 +69,10 @@ TEST_P(GlFormats, PixelAlignedDepthSeparatedBoxesAgreeExactly) {
     const DepthFormat f = GetParam();
     std::vector<Vec3f> p;
     std::vector<Triangle> t;
-    addQuad(p, t, 4, 4, 40, 30, 0.5f);      // tris 0-1: the occluder
-    addQuad(p, t, 10, 2, 60, 20, 0.25f);    // tris 2-3: in front, partly overlapping
-    addQuad(p, t, 20, 10, 50, 45, 0.75f);   // tris 4-5: behind
-    addQuad(p, t, 0, 0, 64, 48, 0.5f);      // tris 6-7: the whole viewport at the occluder's depth
+    addQuad(p, t, 4, 4, 40, 30, 0.5f);  // tris 0-1: the occluder
+    addQuad(p, t, 10, 2, 60, 20, 0.25f);  // tris 2-3: in front, partly overlapping
+    addQuad(p, t, 20, 10, 50, 45, 0.75f);  // tris 4-5: behind
+    addQuad(p, t, 0, 0, 64, 48, 0.5f);  // tris 6-7: the whole viewport at the occluder's depth
     const OrthoView view = identityView(64, 48, f);
 
     std::unique_ptr<GlBackend> gl = raster::makeGlBackend();

@@ -144,8 +144,8 @@ TEST(Hierarchy, TriangleSoupWithDegenerates) {
         for (int k = 0; k < 3; ++k)
             m.positions.push_back(Vec3f(float(rng() % 1000), float(rng() % 1000), float(rng() % 1000)));
         m.triangles.push_back({base, base + 1, base + 2});
-        if (i % 10 == 0) m.triangles.push_back({base, base, base + 1});          // repeated index
-        if (i % 15 == 0) m.triangles.push_back({base, base + 1, base + 2});      // duplicated face
+        if (i % 10 == 0) m.triangles.push_back({base, base, base + 1});  // repeated index
+        if (i % 15 == 0) m.triangles.push_back({base, base + 1, base + 2});  // duplicated face
     }
     HierarchyOptions o;
     o.leafSize = 8;

@@ -18,7 +18,10 @@ using namespace cullide::oracle;
 // 0's face with one corner. Object 3: far away, touching nothing.
 Scene crossingScene() {
     Scene s;
-    auto add = [&](std::vector<Vec3f> p) { s.objects.push_back({std::string("o").append(std::to_string(s.objects.size())), Mesh{std::move(p), {{0, 1, 2}}}, Transform::Identity()}); };
+    auto add = [&](std::vector<Vec3f> p) {
+        s.objects.push_back({std::string("o").append(std::to_string(s.objects.size())), Mesh{std::move(p), {{0, 1, 2}}},
+                             Transform::Identity()});
+    };
     add({{-1, -1, 0}, {3, -1, 0}, {-1, 3, 0}});
     add({{-0.5f, 0, -0.5f}, {0.5f, -0.5f, 0.5f}, {0.5f, 0.5f, 0.5f}});
     add({{1, 1, 0}, {1.5f, 1, 1}, {1, 1.5f, 1}});
@@ -84,8 +87,8 @@ TEST(Measures, PenetrationPixelCentreAndEdgeOn) {
     EXPECT_LT(m.directions[0].depthUnit, 1e-5);  // whole-scene depth extent (10) / 2^24
     EXPECT_TRUE(std::isnan(m.directions[1].penetration));
     EXPECT_FALSE(m.directions[1].pixelCentre);
-    EXPECT_DOUBLE_EQ(m.edgeOnA, 0.0);                   // the z = 0 triangle, seen along x
-    EXPECT_NEAR(m.edgeOnB, std::sqrt(0.5), 1e-12);      // the z = x triangle: 45 degrees to both
+    EXPECT_DOUBLE_EQ(m.edgeOnA, 0.0);  // the z = 0 triangle, seen along x
+    EXPECT_NEAR(m.edgeOnB, std::sqrt(0.5), 1e-12);  // the z = x triangle: 45 degrees to both
     // The touching pair: the corner on the face does not reach behind it.
     EXPECT_LE(r.missed[1].directions[0].penetration, 1e-12);
 }

@@ -22,7 +22,8 @@ using test::TempDir;
 using test::testData;
 
 // The geometry of tests/data/good/polys.* (see tests/data/make_io_data.py).
-const std::vector<Vec3f> kPolyPositions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}, {2, 1, 0}, {3, 0.5f, 0}};
+const std::vector<Vec3f> kPolyPositions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0},   {0, 1, 0},
+                                           {2, 0, 0}, {2, 1, 0}, {3, 0.5f, 0}};
 // Faces (4 5 1), (0 1 2 3), (1 4 6 5 2), fan-triangulated in place.
 const std::vector<Triangle> kPolyTriangles = {{4, 5, 1}, {0, 1, 2}, {0, 2, 3}, {1, 4, 6}, {1, 6, 5}, {1, 5, 2}};
 
@@ -60,14 +61,15 @@ TEST_P(MeshIoPolys, KeepsFileIndicesFaceOrderAndFansPolygons) {
 }
 
 INSTANTIATE_TEST_SUITE_P(MeshIo, MeshIoPolys,
-                         ::testing::Values("good/polys.off", "good/polys.obj", "good/polys_ascii.ply", "good/polys_binary.ply",
-                                           "good/polys_binary_be.ply"));
+                         ::testing::Values("good/polys.off", "good/polys.obj", "good/polys_ascii.ply",
+                                           "good/polys_binary.ply", "good/polys_binary_be.ply"));
 
 // Trap: STL has no indices. Welding must be on bit-identical positions in first-occurrence order
 // (not a hash map's order, not a tolerance), so a closed cube gets back 8 vertices and triangle i
 // is still facet i with its corners in file order. Ascii and binary must agree.
 TEST(MeshIo, StlWeldsBitIdenticalCornersInFirstOccurrenceOrder) {
-    const std::vector<Vec3f> cube = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    const std::vector<Vec3f> cube = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                     {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
     const std::vector<Triangle> facets = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
                                           {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
     // Expected: weld by hand in first-occurrence order.
@@ -76,7 +78,8 @@ TEST(MeshIo, StlWeldsBitIdenticalCornersInFirstOccurrenceOrder) {
     for (const Triangle& f : facets) {
         Triangle t;
         for (int k = 0; k < 3; ++k) {
-            auto [it, inserted] = seen.try_emplace(static_cast<int>(f[k]), static_cast<uint32_t>(expected.positions.size()));
+            auto [it, inserted] =
+                seen.try_emplace(static_cast<int>(f[k]), static_cast<uint32_t>(expected.positions.size()));
             if (inserted) expected.positions.push_back(cube[f[k]]);
             t[k] = it->second;
         }
@@ -94,7 +97,11 @@ TEST(MeshIo, StlWeldsBitIdenticalCornersInFirstOccurrenceOrder) {
 TEST(MeshIo, StlDoesNotWeldNegativeZeroWithZero) {
     TempDir dir;
     std::string b(80, ' ');
-    auto put = [&](float x) { char c[4]; std::memcpy(c, &x, 4); b.append(c, 4); };
+    auto put = [&](float x) {
+        char c[4];
+        std::memcpy(c, &x, 4);
+        b.append(c, 4);
+    };
     const uint32_t n = 2;
     b.append(reinterpret_cast<const char*>(&n), 4);
     const float tris[2][9] = {{0, 0, 0, 1, 0, 0, 0, 1, 0}, {-0.0f, 0, 0, 1, 0, 0, 0, 1, 0}};
@@ -135,20 +142,22 @@ TEST_P(MeshIoBad, ThrowsInputErrorNamingFileAndCause) {
 
 INSTANTIATE_TEST_SUITE_P(
     MeshIo, MeshIoBad,
-    ::testing::Values(BadCase{"bad/does_not_exist.off", "no such file"}, BadCase{"bad/a_directory.off", "directory"},
-                      BadCase{"bad/unknown_extension.xyz", "unknown mesh format"}, BadCase{"bad/parse_error.obj", "line 2: parse error"},
-                      BadCase{"bad/parse_error.off", "line 4: parse error"}, BadCase{"bad/parse_error.ply", "unknown header line"},
-                      BadCase{"bad/parse_error.stl", "parse error"}, BadCase{"bad/truncated_binary.ply", "truncated"},
-                      BadCase{"bad/nan.off", "non-finite"}, BadCase{"bad/inf.off", "non-finite"},
-                      BadCase{"bad/nan_binary.ply", "non-finite"}, BadCase{"bad/overflow.obj", "non-finite"},
-                      BadCase{"bad/index_out_of_range.off", "out of range"}, BadCase{"bad/index_out_of_range.obj", "out of range"},
-                      BadCase{"bad/negative_index.off", "negative vertex index"},
-                      BadCase{"bad/negative_index.obj", "before the first vertex"}, BadCase{"bad/empty.off", "empty file"},
-                      BadCase{"bad/empty.obj", "empty file"}, BadCase{"bad/empty.stl", "empty file"},
-                      BadCase{"bad/zero_triangles.off", "zero triangles"}, BadCase{"bad/zero_triangles.obj", "zero triangles"},
-                      BadCase{"bad/two_vertex_face.off", "at least 3"}, BadCase{"bad/two_vertex_face.obj", "at least 3"},
-                      BadCase{"bad/four_vertex_facet.stl", "exactly 3"},
-                      BadCase{"bad/fewer_faces_than_header.off", "ends before face 1"}),
+    ::testing::Values(
+        BadCase{"bad/does_not_exist.off", "no such file"}, BadCase{"bad/a_directory.off", "directory"},
+        BadCase{"bad/unknown_extension.xyz", "unknown mesh format"},
+        BadCase{"bad/parse_error.obj", "line 2: parse error"}, BadCase{"bad/parse_error.off", "line 4: parse error"},
+        BadCase{"bad/parse_error.ply", "unknown header line"}, BadCase{"bad/parse_error.stl", "parse error"},
+        BadCase{"bad/truncated_binary.ply", "truncated"}, BadCase{"bad/nan.off", "non-finite"},
+        BadCase{"bad/inf.off", "non-finite"}, BadCase{"bad/nan_binary.ply", "non-finite"},
+        BadCase{"bad/overflow.obj", "non-finite"}, BadCase{"bad/index_out_of_range.off", "out of range"},
+        BadCase{"bad/index_out_of_range.obj", "out of range"},
+        BadCase{"bad/negative_index.off", "negative vertex index"},
+        BadCase{"bad/negative_index.obj", "before the first vertex"}, BadCase{"bad/empty.off", "empty file"},
+        BadCase{"bad/empty.obj", "empty file"}, BadCase{"bad/empty.stl", "empty file"},
+        BadCase{"bad/zero_triangles.off", "zero triangles"}, BadCase{"bad/zero_triangles.obj", "zero triangles"},
+        BadCase{"bad/two_vertex_face.off", "at least 3"}, BadCase{"bad/two_vertex_face.obj", "at least 3"},
+        BadCase{"bad/four_vertex_facet.stl", "exactly 3"},
+        BadCase{"bad/fewer_faces_than_header.off", "ends before face 1"}),
     // Stable, readable names (the default prints the pointers, which change with ASLR and make
     // CTest's discovered names miss the tests).
     [](const auto& param) { return cullide::test::paramName(param.param.file); });
@@ -161,11 +170,13 @@ TEST(MeshIo, HugeHeaderCountsFailFastWithoutAllocating) {
     spit(dir / "b.off", "OFF\n2000000000 2000000000 0\n0 0 0\n");
     EXPECT_THROW(loadMesh(dir / "b.off"), InputError);
     spit(dir / "c.ply",
-         "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\n"
+         "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float "
+         "y\nproperty float z\n"
          "element face 1\nproperty list uint int vertex_indices\nelement junk 1000000000000\nend_header\n");
     EXPECT_THROW(loadMesh(dir / "c.ply"), InputError);
     spit(dir / "d.ply",
-         "ply\nformat binary_little_endian 1.0\nelement junk 1000000000000000\nelement vertex 0\nproperty float x\nproperty float y\n"
+         "ply\nformat binary_little_endian 1.0\nelement junk 1000000000000000\nelement vertex 0\nproperty float "
+         "x\nproperty float y\n"
          "property float z\nelement face 0\nproperty list uint int vertex_indices\nend_header\n");
     EXPECT_THROW(loadMesh(dir / "d.ply"), InputError);
 }
@@ -216,7 +227,8 @@ Mesh randomMesh(uint32_t seed, size_t nv, size_t nt) {
         Vec3f p;
         for (int k = 0; k < 3; ++k) {
             uint32_t bits;
-            do bits = rng(); while (!std::isfinite(std::bit_cast<float>(bits)));
+            do bits = rng();
+            while (!std::isfinite(std::bit_cast<float>(bits)));
             p[k] = std::bit_cast<float>(bits);
         }
         if (i == 0) p = Vec3f(-0.0f, std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::max());
@@ -224,7 +236,8 @@ Mesh randomMesh(uint32_t seed, size_t nv, size_t nt) {
         m.positions.push_back(p);
     }
     for (size_t i = 0; i < nt; ++i)
-        m.triangles.push_back({static_cast<uint32_t>(rng() % nv), static_cast<uint32_t>(rng() % nv), static_cast<uint32_t>(rng() % nv)});
+        m.triangles.push_back(
+            {static_cast<uint32_t>(rng() % nv), static_cast<uint32_t>(rng() % nv), static_cast<uint32_t>(rng() % nv)});
     return m;
 }
 
@@ -250,7 +263,8 @@ TEST(MeshIo, WritersAreDeterministic) {
     m.positions = {{0, 0, 0}, {0.1f, 1e-7f, -2.5f}, {1e30f, -0.0f, 3}};
     m.triangles = {{0, 1, 2}};
     writeOff(m, dir / "a.off");
-    EXPECT_EQ(slurp(dir / "a.off"), "OFF\n3 1 0\n0 0 0\n0.100000001 1.00000001e-07 -2.5\n1.00000002e+30 -0 3\n3 0 1 2\n");
+    EXPECT_EQ(slurp(dir / "a.off"),
+              "OFF\n3 1 0\n0 0 0\n0.100000001 1.00000001e-07 -2.5\n1.00000002e+30 -0 3\n3 0 1 2\n");
     writeOff(m, dir / "b.off");
     EXPECT_EQ(slurp(dir / "a.off"), slurp(dir / "b.off"));
     writePly(m, dir / "a.ply");
@@ -269,9 +283,10 @@ TEST(MeshIo, PlyWritesPerFaceColours) {
     const std::vector<Rgb8> colours = {{255, 0, 16}, {1, 2, 3}};
     writePly(m, dir / "a.ply", {.binary = false, .faceColours = colours});
     const std::string text = slurp(dir / "a.ply");
-    EXPECT_NE(text.find("element face 2\nproperty list uchar uint vertex_indices\nproperty uchar red\nproperty uchar green\n"
-                        "property uchar blue\nend_header\n"),
-              std::string::npos)
+    EXPECT_NE(
+        text.find("element face 2\nproperty list uchar uint vertex_indices\nproperty uchar red\nproperty uchar green\n"
+                  "property uchar blue\nend_header\n"),
+        std::string::npos)
         << text;
     EXPECT_NE(text.find("\n3 0 1 2 255 0 16\n3 1 3 2 1 2 3\n"), std::string::npos) << text;
     EXPECT_EQ(loadMesh(dir / "a.ply"), m);
@@ -314,9 +329,11 @@ TEST(MeshIo, FailedWriteLeavesNoFile) {
 TEST(MeshIo, MutatedFilesLoadOrThrowInputErrorNeverCrash) {
     TempDir dir;
     std::mt19937 rng(1234567);
-    const char* files[] = {"good/polys.off", "good/polys.obj", "good/polys_ascii.ply", "good/polys_binary.ply",
-                           "good/polys_binary_be.ply", "good/cube_ascii.stl", "good/cube_binary.stl", "good/degenerate.off"};
-    const char* junk[] = {"-1", "nan", "1e39", "\n", " ", "4294967295", "999999999999", "#", "/", "\0", "end_header\n", "solid", "3"};
+    const char* files[] = {"good/polys.off",        "good/polys.obj",           "good/polys_ascii.ply",
+                           "good/polys_binary.ply", "good/polys_binary_be.ply", "good/cube_ascii.stl",
+                           "good/cube_binary.stl",  "good/degenerate.off"};
+    const char* junk[] = {"-1", "nan", "1e39", "\n",           " ",     "4294967295", "999999999999",
+                          "#",  "/",   "\0",   "end_header\n", "solid", "3"};
     size_t loaded = 0, refused = 0;
     for (const char* file : files) {
         const std::string original = slurp(testData(file));
@@ -327,10 +344,10 @@ TEST(MeshIo, MutatedFilesLoadOrThrowInputErrorNeverCrash) {
             for (int e = 0; e < edits && !s.empty(); ++e) {
                 const size_t at = rng() % s.size();
                 switch (rng() % 4) {
-                case 0: s[at] = static_cast<char>(s[at] ^ (1 << (rng() % 8))); break;
-                case 1: s.resize(at); break;
-                case 2: s.insert(at, junk[rng() % std::size(junk)]); break;
-                case 3: s.insert(at, s.substr(at, rng() % 16)); break;
+                    case 0: s[at] = static_cast<char>(s[at] ^ (1 << (rng() % 8))); break;
+                    case 1: s.resize(at); break;
+                    case 2: s.insert(at, junk[rng() % std::size(junk)]); break;
+                    case 3: s.insert(at, s.substr(at, rng() % 16)); break;
                 }
             }
             std::string name = std::to_string(i);  // (not "m" + ...: GCC 12's -Wrestrict false positive)

@@ -19,10 +19,10 @@ TEST(MeshStats, CountsDuplicatesUnreferencedAndBoundsOnDupVertsFile) {
     const MeshStats s = computeStats(loadMesh(testData("good/dup_verts.off")));
     EXPECT_EQ(s.vertices, 6u);
     EXPECT_EQ(s.triangles, 3u);
-    EXPECT_EQ(s.duplicateVertices, 2u);   // 3 repeats 0, 5 repeats 1; 4 is -0.0 (other bits)
+    EXPECT_EQ(s.duplicateVertices, 2u);  // 3 repeats 0, 5 repeats 1; 4 is -0.0 (other bits)
     EXPECT_EQ(s.duplicateTriangles, 1u);  // (2 1 0) is (0 1 2) reversed
     EXPECT_EQ(s.unreferencedVertices, 1u);
-    EXPECT_EQ(s.components, 1u);          // triangle 1 shares vertex 2 with triangle 0
+    EXPECT_EQ(s.components, 1u);  // triangle 1 shares vertex 2 with triangle 0
     EXPECT_EQ(s.degenerateTriangles, 0u);
     EXPECT_EQ(s.bounds.lo, Vec3f(0, 0, 0));
     EXPECT_EQ(s.bounds.hi, Vec3f(1, 1, 0));
@@ -53,12 +53,14 @@ TEST(MeshStats, CollinearityIsExactAgainstIntegerCrossProduct) {
         Mesh m;
         for (auto& p : q) {
             for (long long& c : p) c = static_cast<long long>(rng() % 3) * 4194301;  // < 2^23: exact in float
-            m.positions.push_back(Vec3f(float(p[0]) * scale + 0.015625f, float(p[1]) * scale, float(p[2]) * scale - 0.015625f));
+            m.positions.push_back(
+                Vec3f(float(p[0]) * scale + 0.015625f, float(p[1]) * scale, float(p[2]) * scale - 0.015625f));
         }
         m.triangles = {{0, 1, 2}};
         const long long u[3] = {q[1][0] - q[0][0], q[1][1] - q[0][1], q[1][2] - q[0][2]};
         const long long v[3] = {q[2][0] - q[0][0], q[2][1] - q[0][1], q[2][2] - q[0][2]};
-        const bool collinear = u[1] * v[2] - u[2] * v[1] == 0 && u[2] * v[0] - u[0] * v[2] == 0 && u[0] * v[1] - u[1] * v[0] == 0;
+        const bool collinear =
+            u[1] * v[2] - u[2] * v[1] == 0 && u[2] * v[0] - u[0] * v[2] == 0 && u[0] * v[1] - u[1] * v[0] == 0;
         // q * 2^-29 < 2^-6 has no bits below 2^-29, nor has the sum with 2^-6: all exact.
         EXPECT_EQ(isDegenerate(m, 0), collinear) << "trial " << trial;
         degenerate += collinear;
@@ -77,7 +79,7 @@ TEST(MeshStats, ComponentsFollowIndicesNotPositions) {
     EXPECT_EQ(s.unreferencedVertices, 1u);
     EXPECT_EQ(s.duplicateVertices, 2u);
     EXPECT_EQ(s.bounds.hi, Vec3f(1, 1, 0));  // the unreferenced (9,9,9) is not in the bounds
-    m.triangles.push_back({2, 6, 4});         // bridges them
+    m.triangles.push_back({2, 6, 4});  // bridges them
     s = computeStats(m);
     EXPECT_EQ(s.components, 1u);
     EXPECT_EQ(s.unreferencedVertices, 0u);

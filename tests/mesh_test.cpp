@@ -102,7 +102,7 @@ TEST(MeshAnimation, SceneAtAppliesOnlyWhatTheFrameGives) {
     EXPECT_EQ(s0.objects[1].mesh.positions, triangle().positions);
     EXPECT_EQ(s1.objects[0].transform.translation(), Vec3f(0, 0, 0));  // frame 0's move does not leak
     EXPECT_EQ(s1.objects[1].mesh.positions[1], Vec3f(2, 0, 0));
-    EXPECT_EQ(s1.objects[1].transform.translation(), Vec3f(0, 0, 1));   // positions only: transform kept
+    EXPECT_EQ(s1.objects[1].transform.translation(), Vec3f(0, 0, 1));  // positions only: transform kept
     EXPECT_EQ(s2.objects[1].mesh.positions, triangle().positions);
     EXPECT_NO_THROW(validateAnimation(a, "anim.json"));
 }

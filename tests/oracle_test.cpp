@@ -25,16 +25,20 @@ namespace {
 
 Scene sceneOf(std::vector<Mesh> meshes) {
     Scene s;
-    for (size_t i = 0; i < meshes.size(); ++i) s.objects.push_back({std::string("m").append(std::to_string(i)), std::move(meshes[i]), Transform::Identity()});
+    for (size_t i = 0; i < meshes.size(); ++i)
+        s.objects.push_back({std::string("m").append(std::to_string(i)), std::move(meshes[i]), Transform::Identity()});
     return s;
 }
 
-Mesh meshOf(std::vector<Vec3f> p, std::vector<Triangle> t) { return Mesh{std::move(p), std::move(t)}; }
+Mesh meshOf(std::vector<Vec3f> p, std::vector<Triangle> t) {
+    return Mesh{std::move(p), std::move(t)};
+}
 
 // The pairs of a one-object scene as (a, b, class).
 std::vector<std::tuple<uint32_t, uint32_t, PairClass>> pairsOf(const Mesh& m, const OracleOptions& o = {}) {
     std::vector<std::tuple<uint32_t, uint32_t, PairClass>> out;
-    for (const IntersectingPair& p : findIntersections(sceneOf({m}), o).pairs) out.emplace_back(p.triangleA, p.triangleB, p.cls);
+    for (const IntersectingPair& p : findIntersections(sceneOf({m}), o).pairs)
+        out.emplace_back(p.triangleA, p.triangleB, p.cls);
     return out;
 }
 
@@ -44,8 +48,9 @@ constexpr PairClass X = PairClass::Crossing, T = PairClass::Touching;
 // Trap: coplanar overlap counted as a crossing (equal depths: only the original method sees it),
 // or missed because the projection plane was chosen by a float normal.
 TEST(Oracle, CoplanarOverlappingIsTouching) {
-    const Mesh m = meshOf({{0, 0, 0.25f}, {2, 0, 0.5f}, {0, 2, 0.75f}, {0.5f, 0.5f, 0.4375f}, {3, 0.5f, 0.75f}, {0.5f, 3, 1.0625f}},
-                          {{0, 1, 2}, {3, 4, 5}});
+    const Mesh m = meshOf(
+        {{0, 0, 0.25f}, {2, 0, 0.5f}, {0, 2, 0.75f}, {0.5f, 0.5f, 0.4375f}, {3, 0.5f, 0.75f}, {0.5f, 3, 1.0625f}},
+        {{0, 1, 2}, {3, 4, 5}});
     // Both on the tilted plane z = 0.25 + 0.125 x + 0.25 y (exact in float at these points).
     EXPECT_EQ(pairsOf(m), (Pairs{{0, 1, T}}));
 }
@@ -54,9 +59,11 @@ TEST(Oracle, CoplanarOverlappingIsTouching) {
 // triangles one float ulp apart.
 TEST(Oracle, CoplanarTouchingAndCoplanarApart) {
     const float gap = std::nextafter(1.0f, 2.0f);
-    const Mesh touch = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {1, 1, 0}, {3, 1, 0}, {1, 3, 0}}, {{0, 1, 2}, {3, 4, 5}});
+    const Mesh touch =
+        meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {1, 1, 0}, {3, 1, 0}, {1, 3, 0}}, {{0, 1, 2}, {3, 4, 5}});
     EXPECT_EQ(pairsOf(touch), (Pairs{{0, 1, T}}));
-    const Mesh apart = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {gap, gap, 0}, {3, 1, 0}, {1, 3, 0}}, {{0, 1, 2}, {3, 4, 5}});
+    const Mesh apart =
+        meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {gap, gap, 0}, {3, 1, 0}, {1, 3, 0}}, {{0, 1, 2}, {3, 4, 5}});
     EXPECT_TRUE(pairsOf(apart).empty());
 }
 
@@ -80,8 +87,8 @@ TEST(Oracle, SharedVertexTouchVersusCrossing) {
     const Mesh fan = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0.5f}, {0, -1, 0.5f}}, {{0, 1, 2}, {0, 3, 4}});
     EXPECT_TRUE(pairsOf(fan).empty());
     // The second triangle's opposite edge pierces the first's interior: a crossing.
-    const Mesh pierce = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, -1}, {0.5f, 0.5f, 1}},
-                               {{0, 1, 2}, {0, 3, 4}});
+    const Mesh pierce =
+        meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, -1}, {0.5f, 0.5f, 1}}, {{0, 1, 2}, {0, 3, 4}});
     EXPECT_EQ(pairsOf(pierce), (Pairs{{0, 1, X}}));
     // The opposite edge passes through the first triangle's edge and the second triangle cuts
     // through the first along a segment from the shared vertex: still a crossing.
@@ -97,15 +104,15 @@ TEST(Oracle, SharedVertexTouchVersusCrossing) {
 TEST(Oracle, TJunctionAndVertexOnFace) {
     const Mesh tj = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {1, 0, 0}, {1, -1, 0}, {1, 0, 1}}, {{0, 1, 2}, {3, 4, 5}});
     EXPECT_EQ(pairsOf(tj), (Pairs{{0, 1, T}}));
-    const Mesh onFace = meshOf({{0, 0, 0}, {3, 0, 1}, {0, 3, 1}, {1, 1, 2.0f / 3.0f}, {1, 1, 5}, {2, 1, 5}},
-                               {{0, 1, 2}, {3, 4, 5}});
+    const Mesh onFace =
+        meshOf({{0, 0, 0}, {3, 0, 1}, {0, 3, 1}, {1, 1, 2.0f / 3.0f}, {1, 1, 5}, {2, 1, 5}}, {{0, 1, 2}, {3, 4, 5}});
     // (1, 1, 2/3) in float is not exactly on z = (x + y) / 3: a float test would call it on the face.
-    const Mesh onFaceExact = meshOf({{0, 0, 0}, {4, 0, 1}, {0, 4, 1}, {1, 1, 0.5f}, {1, 1, 5}, {2, 1, 5}},
-                                    {{0, 1, 2}, {3, 4, 5}});
+    const Mesh onFaceExact =
+        meshOf({{0, 0, 0}, {4, 0, 1}, {0, 4, 1}, {1, 1, 0.5f}, {1, 1, 5}, {2, 1, 5}}, {{0, 1, 2}, {3, 4, 5}});
     EXPECT_EQ(pairsOf(onFaceExact), (Pairs{{0, 1, T}}));
     const float above = std::nextafter(0.5f, 1.0f);
-    const Mesh justAbove = meshOf({{0, 0, 0}, {4, 0, 1}, {0, 4, 1}, {1, 1, above}, {1, 1, 5}, {2, 1, 5}},
-                                  {{0, 1, 2}, {3, 4, 5}});
+    const Mesh justAbove =
+        meshOf({{0, 0, 0}, {4, 0, 1}, {0, 4, 1}, {1, 1, above}, {1, 1, 5}, {2, 1, 5}}, {{0, 1, 2}, {3, 4, 5}});
     EXPECT_TRUE(pairsOf(justAbove).empty());
     // 2/3 rounded to float lies above or below the plane, never on it: crossing or nothing, not touching.
     for (const auto& [a, b, c] : pairsOf(onFace)) EXPECT_NE(c, T);
@@ -129,14 +136,16 @@ TEST(Oracle, DuplicatedFacesAndDuplicatedVertices) {
     EXPECT_EQ(pairsOf(dup), (Pairs{{0, 1, T}}));
     // Two flat neighbours whose shared edge uses duplicated vertices (3 = 1, 4 = 2 bit for bit):
     // by index they share nothing and touch along the edge; welded they are neighbours.
-    const Mesh soup = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}, {{0, 1, 2}, {4, 3, 5}});
+    const Mesh soup =
+        meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}, {{0, 1, 2}, {4, 3, 5}});
     EXPECT_EQ(pairsOf(soup), (Pairs{{0, 1, T}}));
     OracleOptions weld;
     weld.weldByPosition = true;
     EXPECT_TRUE(pairsOf(soup, weld).empty());
     // Welding is by world position: (1, 0, 0) and (1, 0, 0) weld, (0, 1, 0.5) stays apart, so
     // the triangles share one vertex and meet nowhere else.
-    const Mesh partly = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0.5f}, {1, 1, 0}}, {{0, 1, 2}, {4, 3, 5}});
+    const Mesh partly =
+        meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0.5f}, {1, 1, 0}}, {{0, 1, 2}, {4, 3, 5}});
     EXPECT_TRUE(pairsOf(partly, weld).empty());
 }
 
@@ -146,17 +155,23 @@ TEST(Oracle, DuplicatedFacesAndDuplicatedVertices) {
 // below crosses.
 TEST(Oracle, TinyHugeAndNearParallel) {
     for (float scale : {0x1p-100f, 1.0f, 0x1p55f}) {
-        const Mesh m = meshOf({{0, 0, 0}, {2 * scale, 0, 0}, {0, 2 * scale, 0}, {0.5f * scale, 0.5f * scale, -scale},
-                               {0.5f * scale, 0.5f * scale, scale}, {3 * scale, 3 * scale, scale}},
+        const Mesh m = meshOf({{0, 0, 0},
+                               {2 * scale, 0, 0},
+                               {0, 2 * scale, 0},
+                               {0.5f * scale, 0.5f * scale, -scale},
+                               {0.5f * scale, 0.5f * scale, scale},
+                               {3 * scale, 3 * scale, scale}},
                               {{0, 1, 2}, {3, 4, 5}});
         EXPECT_EQ(pairsOf(m), (Pairs{{0, 1, X}})) << "scale " << scale;
     }
     const float tiny = std::numeric_limits<float>::denorm_min();
-    const Mesh above = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, tiny}, {1.5f, 0.2f, tiny}, {0.2f, 1.5f, tiny}},
-                              {{0, 1, 2}, {3, 4, 5}});
+    const Mesh above =
+        meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, tiny}, {1.5f, 0.2f, tiny}, {0.2f, 1.5f, tiny}},
+               {{0, 1, 2}, {3, 4, 5}});
     EXPECT_TRUE(pairsOf(above).empty());
-    const Mesh dips = meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, -tiny}, {1.5f, 0.2f, tiny}, {0.2f, 1.5f, tiny}},
-                             {{0, 1, 2}, {3, 4, 5}});
+    const Mesh dips =
+        meshOf({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, -tiny}, {1.5f, 0.2f, tiny}, {0.2f, 1.5f, tiny}},
+               {{0, 1, 2}, {3, 4, 5}});
     EXPECT_EQ(pairsOf(dips), (Pairs{{0, 1, X}}));
 }
 
@@ -179,7 +194,8 @@ TEST(Oracle, BroadPhaseMatchesAllPairs) {
         for (int t = 0; t < 150; ++t) {
             const Vec3f c(u(rng), u(rng), u(rng));
             const uint32_t base = uint32_t(m.positions.size());
-            for (int k = 0; k < 3; ++k) m.positions.push_back(c + 0.15f * Vec3f(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
+            for (int k = 0; k < 3; ++k)
+                m.positions.push_back(c + 0.15f * Vec3f(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
             // Every third triangle reuses a corner of the previous one: shared-vertex rules too.
             if (t % 3 == 2) m.triangles.push_back({base - 1, base + 1, base + 2});
             else m.triangles.push_back({base, base + 1, base + 2});
@@ -195,9 +211,9 @@ TEST(Oracle, BroadPhaseMatchesAllPairs) {
         for (uint32_t ta = 0; ta < 150; ++ta)
             for (uint32_t ob = oa; ob < 3; ++ob)
                 for (uint32_t tb = ob == oa ? ta + 1 : 0; tb < 150; ++tb) {
-                    const Contact c = faceContact(pts(oa, ta), meshes[oa].triangles[ta], pts(ob, tb), meshes[ob].triangles[tb], oa == ob);
-                    if (c != Contact::None)
-                        expected.push_back({oa, ta, ob, tb, c == Contact::Crossing ? X : T});
+                    const Contact c = faceContact(pts(oa, ta), meshes[oa].triangles[ta], pts(ob, tb),
+                                                  meshes[ob].triangles[tb], oa == ob);
+                    if (c != Contact::None) expected.push_back({oa, ta, ob, tb, c == Contact::Crossing ? X : T});
                 }
     EXPECT_GT(expected.size(), 100u);
     for (BroadPhase b : {BroadPhase::Grid, BroadPhase::Embree}) {
@@ -218,11 +234,14 @@ TEST(Oracle, RefusesNonFiniteAndHugeCoordinates) {
     m.positions[1].x() = 1;
     m.triangles[0][2] = 7;
     EXPECT_THROW(findIntersections(sceneOf({m})), InputError);
-    EXPECT_THROW(exactStage(sceneOf({meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}})}), std::vector<TriangleRef>{{0, 1}}),
-                 InputError);
+    EXPECT_THROW(
+        exactStage(sceneOf({meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}})}), std::vector<TriangleRef>{{0, 1}}),
+        InputError);
 }
 
-Mesh bundled(const char* name) { return loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/" + name); }
+Mesh bundled(const char* name) {
+    return loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/" + name);
+}
 
 // The callback runs concurrently in no fixed order: the result must not depend on the threads.
 TEST(Oracle, DeterministicForOneAndTwoThreads) {
@@ -273,8 +292,12 @@ void expectSameAsCgal(const Mesh& mesh, const std::string& what, size_t expected
 }
 
 // The bundled cow self-intersects: CGAL finds 101 pairs.
-TEST(OracleCgal, CowSameAsCgal) { expectSameAsCgal(bundled("cow.off"), "cow", 101); }
-TEST(OracleCgal, BunnySameAsCgal) { expectSameAsCgal(bundled("bunny.off"), "bunny"); }
+TEST(OracleCgal, CowSameAsCgal) {
+    expectSameAsCgal(bundled("cow.off"), "cow", 101);
+}
+TEST(OracleCgal, BunnySameAsCgal) {
+    expectSameAsCgal(bundled("bunny.off"), "bunny");
+}
 
 // The paper's generated scenes at a few thousand triangles (the deformation makes the crossings).
 TEST(OracleCgal, GeneratedScenesSameAsCgal) {
@@ -298,7 +321,8 @@ TEST(Oracle, NearlyCoplanarNeighboursMatchFaceContact) {
     std::vector<IntersectingPair> expected;
     auto pts = [&](uint32_t t) {
         const Triangle& i = m.triangles[t];
-        return TrianglePoints{m.positions[i[0]].cast<double>(), m.positions[i[1]].cast<double>(), m.positions[i[2]].cast<double>()};
+        return TrianglePoints{m.positions[i[0]].cast<double>(), m.positions[i[1]].cast<double>(),
+                              m.positions[i[2]].cast<double>()};
     };
     const uint32_t n = uint32_t(m.triangles.size());
     for (uint32_t a = 0; a < n; ++a)
@@ -314,7 +338,9 @@ TEST(Oracle, NearlyCoplanarNeighboursMatchFaceContact) {
 
 // The cow subdivided once: rounded midpoints make most neighbours nearly (not exactly)
 // coplanar, the case the exact integer paths decide.
-TEST(OracleCgal, SubdividedCowSameAsCgal) { expectSameAsCgal(subdivide(bundled("cow.off")), "subdivided cow"); }
+TEST(OracleCgal, SubdividedCowSameAsCgal) {
+    expectSameAsCgal(subdivide(bundled("cow.off")), "subdivided cow");
+}
 
 }  // namespace
 }  // namespace cullide::oracle

@@ -16,8 +16,12 @@ namespace {
 
 using EK = CGAL::Exact_predicates_exact_constructions_kernel;
 
-EK::Point_3 ep(const Vec3d& p) { return {p.x(), p.y(), p.z()}; }
-EK::Triangle_3 et(const TrianglePoints& t) { return {ep(t[0]), ep(t[1]), ep(t[2])}; }
+EK::Point_3 ep(const Vec3d& p) {
+    return {p.x(), p.y(), p.z()};
+}
+EK::Triangle_3 et(const TrianglePoints& t) {
+    return {ep(t[0]), ep(t[1]), ep(t[2])};
+}
 
 // Relative interior of a non-degenerate triangle: on it, and on none of its edges.
 bool inRelativeInterior(const EK::Triangle_3& t, const EK::Point_3& p) {
@@ -44,7 +48,9 @@ Contact reference(const TrianglePoints& a, const TrianglePoints& b) {
     return Contact::Touching;
 }
 
-Vec3d v(double x, double y, double z) { return Vec3d(x, y, z); }
+Vec3d v(double x, double y, double z) {
+    return Vec3d(x, y, z);
+}
 
 // Trap: a float orient3d that returns a sign for points that are exactly coplanar, or zero for
 // points a few ulps off the plane. Points on the plane x + y + z = 1 (exactly, in binary) and
@@ -111,12 +117,13 @@ TEST(Predicates, ContactAndClassMatchExactReferenceOnGridTriangles) {
 // Trap: segment-triangle through a corner, along an edge, in the plane, one ulp short.
 TEST(Predicates, SegmentTriangleOnBoundaries) {
     const TrianglePoints t{v(0, 0, 0), v(4, 0, 0), v(0, 4, 0)};
-    EXPECT_TRUE(triangleSegmentIntersect(t, v(0, 0, -1), v(0, 0, 1)));    // through a corner
-    EXPECT_TRUE(triangleSegmentIntersect(t, v(2, 2, -1), v(2, 2, 1)));    // through the hypotenuse
-    EXPECT_FALSE(triangleSegmentIntersect(t, v(2, std::nextafter(2.0f, 3.0f), -1), v(2, std::nextafter(2.0f, 3.0f), 1)));
-    EXPECT_TRUE(triangleSegmentIntersect(t, v(1, 1, 0), v(9, 9, 0)));     // coplanar, inside
-    EXPECT_FALSE(triangleSegmentIntersect(t, v(3, 3, 0), v(9, 9, 0)));    // coplanar, outside
-    EXPECT_TRUE(triangleSegmentIntersect(t, v(1, 1, 0), v(1, 1, 5)));     // ends on the face
+    EXPECT_TRUE(triangleSegmentIntersect(t, v(0, 0, -1), v(0, 0, 1)));  // through a corner
+    EXPECT_TRUE(triangleSegmentIntersect(t, v(2, 2, -1), v(2, 2, 1)));  // through the hypotenuse
+    EXPECT_FALSE(
+        triangleSegmentIntersect(t, v(2, std::nextafter(2.0f, 3.0f), -1), v(2, std::nextafter(2.0f, 3.0f), 1)));
+    EXPECT_TRUE(triangleSegmentIntersect(t, v(1, 1, 0), v(9, 9, 0)));  // coplanar, inside
+    EXPECT_FALSE(triangleSegmentIntersect(t, v(3, 3, 0), v(9, 9, 0)));  // coplanar, outside
+    EXPECT_TRUE(triangleSegmentIntersect(t, v(1, 1, 0), v(1, 1, 5)));  // ends on the face
     EXPECT_FALSE(triangleSegmentIntersect(t, v(1, 1, 0x1p-149), v(1, 1, 5)));  // one denormal above
 }
 

@@ -48,7 +48,9 @@ CommandList alwaysQueries(std::initializer_list<std::pair<uint32_t, uint32_t>> r
     return l;
 }
 
-std::string failPath(const std::string& name) { return ::testing::TempDir() + "cullide_raster_" + name + ".png"; }
+std::string failPath(const std::string& name) {
+    return ::testing::TempDir() + "cullide_raster_" + name + ".png";
+}
 
 // Writes both depth images and their difference mask for a failed comparison; returns a note.
 std::string dumpDiff(const std::string& name, const DepthImage& a, const DepthImage& b) {
@@ -74,7 +76,7 @@ TEST(RasterRules, SnapRoundsToNearestTiesUp) {
     EXPECT_EQ(snapToFixed(0.0, 8), 0);
     EXPECT_EQ(snapToFixed(1.0, 8), 256);
     EXPECT_EQ(snapToFixed(0.5 / 256, 8), 1);
-    EXPECT_EQ(snapToFixed(-0.5 / 256, 8), 0);    // tie goes up, also below zero
+    EXPECT_EQ(snapToFixed(-0.5 / 256, 8), 0);  // tie goes up, also below zero
     EXPECT_EQ(snapToFixed(-1.5 / 256, 8), -1);
     EXPECT_EQ(snapToFixed(std::nextafter(0.5 / 256, 0.0), 8), 0);
     EXPECT_EQ(snapToFixed(0.49999999999999994, 0 + 1), 1);  // 0.99999999999999989 -> 1
@@ -87,12 +89,12 @@ TEST(RasterRules, SnapRoundsToNearestTiesUp) {
 uint32_t exactUnorm(double z, int n) {
     if (z == 0) return 0;
     int e = 0;
-    const double m = std::frexp(z, &e);                  // z = m * 2^e, m in [0.5, 1)
+    const double m = std::frexp(z, &e);  // z = m * 2^e, m in [0.5, 1)
     const auto M = (unsigned __int128)std::ldexp(m, 53);  // z = M * 2^(e-53)
-    const int shift = 53 - e;                             // z = M / 2^shift, shift >= 53
+    const int shift = 53 - e;  // z = M / 2^shift, shift >= 53
     const unsigned __int128 c = (unsigned __int128)((uint64_t(1) << n) - 1);
-    if (shift >= 127) return 0;                           // z < 2^-74: z*c < 1/2
-    const unsigned __int128 p = M * c;                    // z*c = p / 2^shift (p < 2^86)
+    if (shift >= 127) return 0;  // z < 2^-74: z*c < 1/2
+    const unsigned __int128 p = M * c;  // z*c = p / 2^shift (p < 2^86)
     const unsigned __int128 half = (unsigned __int128)1 << (shift - 1);
     return uint32_t((p + half) >> shift);
 }
@@ -138,13 +140,13 @@ TEST(RasterRules, ClampAndFloatEncoding) {
 // Trap: the edge classification inverted, which breaks the "exactly one owner" rule.
 TEST(RasterRules, InclusiveEdges) {
     // CCW triangle: bottom edge goes +x, right edge goes up, left edge goes down.
-    EXPECT_TRUE(isInclusiveEdge(FillRule::BottomLeft, 5, 0));   // bottom
+    EXPECT_TRUE(isInclusiveEdge(FillRule::BottomLeft, 5, 0));  // bottom
     EXPECT_FALSE(isInclusiveEdge(FillRule::BottomLeft, -5, 0));  // top
     EXPECT_FALSE(isInclusiveEdge(FillRule::TopLeft, 5, 0));
     EXPECT_TRUE(isInclusiveEdge(FillRule::TopLeft, -5, 0));
     for (FillRule r : {FillRule::BottomLeft, FillRule::TopLeft}) {
-        EXPECT_TRUE(isInclusiveEdge(r, 3, -1));   // left
-        EXPECT_FALSE(isInclusiveEdge(r, 3, 1));   // right
+        EXPECT_TRUE(isInclusiveEdge(r, 3, -1));  // left
+        EXPECT_FALSE(isInclusiveEdge(r, 3, 1));  // right
         // A shared edge is seen in both directions: exactly one side owns it.
         for (int dx = -2; dx <= 2; ++dx)
             for (int dy = -2; dy <= 2; ++dy)
@@ -230,7 +232,8 @@ TEST(Figure5a, CasesABCForDepthBits8_16_24) {
         const double A_s = (m + 0.3) / c, A_q = (m - 0.3) / c;
         const double B_s = (m - 0.3) / c, B_q = (m + 0.3) / c;
         const double C_s = (m + 0.3) / c, C_q = (m + 0.7) / c;
-        const Reported a = figure5aForward(n, A_s, A_q), b = figure5aForward(n, B_s, B_q), cc = figure5aForward(n, C_s, C_q);
+        const Reported a = figure5aForward(n, A_s, A_q), b = figure5aForward(n, B_s, B_q),
+                       cc = figure5aForward(n, C_s, C_q);
         EXPECT_TRUE(a.cullide) << "n=" << n;
         EXPECT_FALSE(a.modified) << "n=" << n;
         EXPECT_TRUE(b.cullide) << "n=" << n;
@@ -252,7 +255,8 @@ TEST(Figure5a, PenetrationOfOneStoredStepIsAlwaysReported) {
     for (int n : {8, 16, 24}) {
         const double c = std::ldexp(1.0, n) - 1;
         for (int i = 0; i < 60; ++i) {
-            const float s = float(std::ldexp(1.0 + double(rng() % 1000000) / 1e6, -2 - int(rng() % 9)));  // [2^-10, 1/2)
+            const float s =
+                float(std::ldexp(1.0 + double(rng() % 1000000) / 1e6, -2 - int(rng() % 9)));  // [2^-10, 1/2)
             float q = float(double(s) + 1.0 / c);
             while ((double(q) - double(s)) * c < 1.0) q = std::nextafter(q, 2.0f);  // exact in double here
             const Reported r = figure5aForward(n, s, q);
@@ -364,7 +368,7 @@ TEST(Figure5b, CaseC_TwoSharedCentresWithSeparatedDepths) {
         g.tri(a, b, e);
         g.tri(a, e, d);
         const auto [gequal, greater] = queryBoth(g, 0, 2, 2, 2, kFigure5bBits);
-        EXPECT_EQ(gequal, 1u) << behindSteps;                       // P2 only
+        EXPECT_EQ(gequal, 1u) << behindSteps;  // P2 only
         EXPECT_EQ(greater, behindSteps >= 1.0 ? 1u : 0u) << behindSteps;
     }
 }
@@ -440,7 +444,8 @@ Tiling makeFan(std::mt19937_64& rng, int W, int H) {
     t.Y0 = gridValue(rng, 0.0, 2.0);
     t.X1 = gridValue(rng, W - 2.0, W + 1.0);
     t.Y1 = gridValue(rng, H - 2.0, H + 1.0);
-    const uint32_t centre = t.geo.add(float(gridValue(rng, t.X0 + 1, t.X1 - 1)), float(gridValue(rng, t.Y0 + 1, t.Y1 - 1)), 0.5f);
+    const uint32_t centre =
+        t.geo.add(float(gridValue(rng, t.X0 + 1, t.X1 - 1)), float(gridValue(rng, t.Y0 + 1, t.Y1 - 1)), 0.5f);
     // Ring: corners plus random points on each side, counter-clockwise.
     std::vector<uint32_t> ring;
     auto side = [&](double ax, double ay, double bx, double by) {
@@ -514,8 +519,8 @@ Tiling makeSoup(std::mt19937_64& rng, int W, int H, int inserts) {
 }
 
 // Checks a tiling; returns false (after reporting) on failure.
-bool checkTiling(const Tiling& t, int W, int H, FillRule rule, int threads, const std::string& name,
-                 double offsetX = 0, double offsetY = 0) {
+bool checkTiling(const Tiling& t, int W, int H, FillRule rule, int threads, const std::string& name, double offsetX = 0,
+                 double offsetY = 0) {
     Geo g = t.geo;
     for (Vec3f& p : g.positions) p += Vec3f(float(offsetX), float(offsetY), 0);
     CpuBackendOptions o;
@@ -729,9 +734,9 @@ TEST(Clipping, HugeTrianglesBeyondTheGuardBandStillCoverTheViewport) {
 // than a subpixel, produce no fragment and are counted as zero-area.
 TEST(Degenerate, EdgeOnTrianglesProduceNothingAndAreCounted) {
     Geo g;
-    g.tri(Vec3f(1, 1, 0.2f), Vec3f(7, 7, 0.4f), Vec3f(4, 4, 0.9f));           // edge-on: collinear in x, y
+    g.tri(Vec3f(1, 1, 0.2f), Vec3f(7, 7, 0.4f), Vec3f(4, 4, 0.9f));  // edge-on: collinear in x, y
     g.tri(Vec3f(1, 1, 0.2f), Vec3f(7, 1.001f, 0.4f), Vec3f(4, 1.0005f, 0.9f));  // collapses when snapped
-    g.tri(Vec3f(2, 2, 0.5f), Vec3f(2, 2, 0.5f), Vec3f(5, 6, 0.5f));           // repeated vertex
+    g.tri(Vec3f(2, 2, 0.5f), Vec3f(2, 2, 0.5f), Vec3f(5, 6, 0.5f));  // repeated vertex
     for (bool ref : {false, true}) {
         CpuBackendOptions o;
         o.scalarReference = ref;
@@ -769,8 +774,8 @@ RandomScene randomScene(uint64_t seed, int W, int H, int triangles, int commands
             v = Vec3f(float(cx + uni(-size, size)), float(cy + uni(-size, size)),
                       float(zc + uni(-0.3, 0.3) * (kind == 9 ? 3 : 1)));
         if (rng() % 25 == 0) p[2] = p[0] + (p[1] - p[0]) * 0.5f;  // degenerate
-        if (rng() % 40 == 0) p[1].x() = float(uni(-1e8, 1e8));    // beyond the guard band
-        if (rng() % 7 == 0) {                                      // on the subpixel grid / centres
+        if (rng() % 40 == 0) p[1].x() = float(uni(-1e8, 1e8));  // beyond the guard band
+        if (rng() % 7 == 0) {  // on the subpixel grid / centres
             for (auto& v : p) {
                 v.x() = std::round(v.x() * 2) / 2;
                 v.y() = std::round(v.y() * 2) / 2;
@@ -778,15 +783,16 @@ RandomScene randomScene(uint64_t seed, int W, int H, int triangles, int commands
         }
         s.geo.tri(p[0], p[1], p[2]);
     }
-    const DepthFunc funcs[] = {DepthFunc::Never,    DepthFunc::Less,   DepthFunc::Equal,  DepthFunc::LEqual,
-                               DepthFunc::Greater,  DepthFunc::NotEqual, DepthFunc::GEqual, DepthFunc::Always};
+    const DepthFunc funcs[] = {DepthFunc::Never,   DepthFunc::Less,     DepthFunc::Equal,  DepthFunc::LEqual,
+                               DepthFunc::Greater, DepthFunc::NotEqual, DepthFunc::GEqual, DepthFunc::Always};
     s.list.clear(uni(0.5, 1.0));
     bool open = false;
     for (int c = 0; c < commands; ++c) {
         const int op = int(rng() % 12);
         if (op < 6) {
             const uint32_t first = uint32_t(rng() % uint64_t(triangles));
-            const uint32_t count = uint32_t(rng() % uint64_t(std::min<uint64_t>(triangles - first, 1 + rng() % 40) + 1));
+            const uint32_t count =
+                uint32_t(rng() % uint64_t(std::min<uint64_t>(triangles - first, 1 + rng() % 40) + 1));
             s.list.draw(first, count);
         } else if (op == 6) {
             s.list.depthFunc(funcs[rng() % 8]);
@@ -795,10 +801,8 @@ RandomScene randomScene(uint64_t seed, int W, int H, int triangles, int commands
         } else if (op == 8) {
             s.list.depthMask(rng() % 3 != 0);
         } else if (op == 9 || op == 10) {
-            if (open)
-                s.list.endQuery();
-            else
-                s.list.beginQuery(rng() % 4 == 0 ? QueryKind::AnySamplesPassed : QueryKind::SamplesPassed);
+            if (open) s.list.endQuery();
+            else s.list.beginQuery(rng() % 4 == 0 ? QueryKind::AnySamplesPassed : QueryKind::SamplesPassed);
             open = !open;
         } else if (rng() % 8 == 0) {
             s.list.clear(uni(0, 1));
@@ -840,7 +844,7 @@ void expectSame(const Outcome& a, const Outcome& b, const std::string& what) {
 // disagreeing with the obvious per-pixel loop; for every format, both fill rules, several
 // subpixel precisions and tile sizes (including tiles that do not divide the viewport).
 TEST(Differential, FastPathEqualsScalarReferenceOnRandomScenes) {
-    const DepthFormat formats[] = {DepthFormat::unorm(8), DepthFormat::unorm(16), DepthFormat::unorm(24),
+    const DepthFormat formats[] = {DepthFormat::unorm(8),  DepthFormat::unorm(16), DepthFormat::unorm(24),
                                    DepthFormat::unorm(31), DepthFormat::unorm(32), DepthFormat::float32()};
     for (uint64_t seed = 1; seed <= 24; ++seed) {
         std::mt19937_64 pick(seed * 7919);
@@ -861,8 +865,8 @@ TEST(Differential, FastPathEqualsScalarReferenceOnRandomScenes) {
                 fast.threads = 2;
                 fast.simd = simd;
                 expectSame(expected, run(s, view, fast, 2),
-                           "seed " + std::to_string(seed) + " tile " + std::to_string(tile) + (simd ? " simd " : " scalar ") +
-                               view.depth.name());
+                           "seed " + std::to_string(seed) + " tile " + std::to_string(tile) +
+                               (simd ? " simd " : " scalar ") + view.depth.name());
             }
     }
 }
@@ -934,8 +938,9 @@ TEST(Differential, RepeatedDrawsReplayTheirFragments) {
                 fast.tileSize = tile;
                 fast.threads = 2;
                 fast.simd = simd;
-                expectSame(expected, run(s, view, fast, 2),
-                           "seed " + std::to_string(seed) + " tile " + std::to_string(tile) + (simd ? " simd" : " scalar"));
+                expectSame(
+                    expected, run(s, view, fast, 2),
+                    "seed " + std::to_string(seed) + " tile " + std::to_string(tile) + (simd ? " simd" : " scalar"));
             }
     }
 }
@@ -974,7 +979,7 @@ uint64_t lowerLeftCount(int64_t W, int64_t H) {
 // Trap: off-by-one at the viewport border, tiles at the right/top edge partly outside, 1-pixel
 // and very elongated viewports, and the largest sizes.
 TEST(Resolution, FromOneByOneToHuge) {
-    std::vector<std::pair<int, int>> sizes = {{1, 1},   {1, 7},    {7, 1},     {3, 5},     {64, 64},   {65, 63},
+    std::vector<std::pair<int, int>> sizes = {{1, 1},     {1, 7},      {7, 1},    {3, 5},    {64, 64},  {65, 63},
                                               {500, 500}, {1024, 768}, {4096, 1}, {1, 4096}, {1000, 37}};
     if (!CULLIDE_SANITIZED) sizes.push_back({4096, 4096});
     for (auto [W, H] : sizes) {
@@ -1061,7 +1066,7 @@ TEST(Png, WritesDepthAndMaskPictures) {
         EXPECT_EQ(head[2], 'N');
         EXPECT_EQ(head[3], 'G');
         EXPECT_EQ(head[19], 16);  // IHDR width (big endian, low byte)
-        EXPECT_EQ(head[23], 8);   // IHDR height
+        EXPECT_EQ(head[23], 8);  // IHDR height
         std::remove(p.c_str());
     }
     EXPECT_THROW(writeMaskPng(16, 8, mask, "/nonexistent-folder/x.png"), InputError);

@@ -34,8 +34,6 @@ using cullide::test::sceneOf;
 
 namespace {
 
-
-
 // A UV sphere (closed, no self-intersection).
 Mesh sphere(int rings, int sectors, float r = 1) {
     Mesh m;
@@ -81,7 +79,7 @@ struct Outcome {
 };
 
 Outcome reliable(const Scene& scene, int resolution, DepthFormat depth, uint32_t leafSize = 16,
-             std::vector<Vec3d> directions = axisDirections(), int threads = 0) {
+                 std::vector<Vec3d> directions = axisDirections(), int threads = 0) {
     raster::CpuBackendOptions bo;
     bo.threads = threads;
     auto backend = raster::makeCpuBackend(bo);
@@ -99,8 +97,8 @@ Outcome reliable(const Scene& scene, int resolution, DepthFormat depth, uint32_t
 
 std::string describe(const study::PcsReport& r) {
     return "false prunes " + std::to_string(r.falsePruneCount()) + " (crossing " + std::to_string(r.falsePrunes[0]) +
-           ", touching " + std::to_string(r.falsePrunes[1]) + "), PCS " + std::to_string(r.pcsTriangles) +
-           ", colliding " + std::to_string(r.collidingTriangles);
+        ", touching " + std::to_string(r.falsePrunes[1]) + "), PCS " + std::to_string(r.pcsTriangles) + ", colliding " +
+        std::to_string(r.collidingTriangles);
 }
 
 const std::vector<DepthFormat>& allFormats() {
@@ -223,9 +221,9 @@ TEST(ReliablePieces, ExactPairRuleNeverNoWhereTheOracleSeesContactOnRandomFans) 
     EXPECT_GT(total.contacts[0], 50u);  // free triangles through the fans
     EXPECT_GT(total.contacts[1], 50u);  // through the opposite edge, or overlapping coplanar wedges
     EXPECT_GT(total.contacts[2], 20u);  // coplanar fold-overs
-    EXPECT_GT(total.contacts[3], 5u);   // duplicated faces
-    EXPECT_GT(total.no[1], 200u);       // neighbours that merely touch at the centre
-    EXPECT_GT(total.no[2], 200u);       // bent or flat neighbours
+    EXPECT_GT(total.contacts[3], 5u);  // duplicated faces
+    EXPECT_GT(total.no[1], 200u);  // neighbours that merely touch at the centre
+    EXPECT_GT(total.no[2], 200u);  // bent or flat neighbours
 }
 
 // Trap: neighbours the float filter cannot decide. Fans whose rim vertices lie within a few ulps
@@ -240,8 +238,8 @@ TEST(ReliablePieces, ExactPairRuleNeverNoWhereTheOracleSeesContactOnNearlyCoplan
         for (int k = 0; k < 4; ++k) total.contacts[k] += c.contacts[k], total.no[k] += c.no[k];
     }
     EXPECT_GT(total.contacts[1], 20u);  // the extra triangles across a fan, through it or on it
-    EXPECT_GT(total.no[1], 500u);       // rim triangles that meet only at the centre
-    EXPECT_GT(total.no[2], 300u);       // rim neighbours, flat within ulps or bent
+    EXPECT_GT(total.no[1], 500u);  // rim triangles that meet only at the centre
+    EXPECT_GT(total.no[2], 300u);  // rim neighbours, flat within ulps or bent
 }
 
 // Trap: the GL backend has no conservative rasterization; asking for the reliable method there
@@ -251,7 +249,9 @@ TEST(ReliableMethod, RefusedByABackendWithoutConservativeRasterization) {
         std::string describe() const override { return "test backend"; }
         void setGeometry(std::span<const Vec3f>, std::span<const Triangle>) override {}
         void setView(const OrthoView&) override {}
-        std::vector<uint64_t> execute(const CommandList& l) override { return std::vector<uint64_t>(l.queryCount(), 0); }
+        std::vector<uint64_t> execute(const CommandList& l) override {
+            return std::vector<uint64_t>(l.queryCount(), 0);
+        }
         DepthImage readDepth() override { return {}; }
     } backend;
     CullideOptions o;
@@ -280,7 +280,8 @@ TEST(ReliableMethod, EdgeOnAxisAlignedBoxesAreKept) {
             for (uint32_t leaf : {1u, 4u}) {
                 const Outcome r = reliable(s, res, f, leaf);
                 ASSERT_GT(r.report.collidingTriangles, 0u);
-                EXPECT_EQ(r.report.falsePruneCount(), 0u) << res << " " << f.name() << " leaf " << leaf << ": " << describe(r.report);
+                EXPECT_EQ(r.report.falsePruneCount(), 0u)
+                    << res << " " << f.name() << " leaf " << leaf << ": " << describe(r.report);
             }
 }
 
@@ -289,9 +290,9 @@ TEST(ReliableMethod, EdgeOnAxisAlignedBoxesAreKept) {
 TEST(ReliableMethod, TouchingContactsAreKept) {
     const Scene faceToFace = sceneOf({{box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), Transform::Identity()},
                                       {box(Vec3f(0.3f, 0.2f, 1), Vec3f(1.5f, 1.4f, 2)), Transform::Identity()}});
-    const Scene tilted = sceneOf({{box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), Transform::Identity()},
-                                  {box(Vec3f(-0.5f, -0.5f, -0.5f), Vec3f(0.5f, 0.5f, 0.5f)),
-                                   test::rotation(0.3, 0.5, 0.1, Vec3f(3, 3, 3))}});
+    const Scene tilted = sceneOf(
+        {{box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), Transform::Identity()},
+         {box(Vec3f(-0.5f, -0.5f, -0.5f), Vec3f(0.5f, 0.5f, 0.5f)), test::rotation(0.3, 0.5, 0.1, Vec3f(3, 3, 3))}});
     // The second box's lowest vertex moved to rest exactly on the first box's top face is hard to
     // make in float; a box sharing the first one's corner position exactly is a vertex contact.
     const Scene corner = sceneOf({{box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), Transform::Identity()},
@@ -328,7 +329,8 @@ TEST(ReliableMethod, SelfCrossingRibbonsAreKeptAndTheRestPruned) {
 // Trap: two spheres far apart, and a sphere alone (closed surface: every unit sees units behind it
 // in every direction): nothing intersects, and the PCS must become empty at a fair resolution.
 TEST(ReliableMethod, SeparatedClosedSurfacesArePruned) {
-    const Scene s = sceneOf({{sphere(16, 24), Transform::Identity()}, {sphere(16, 24), test::rotation(0.1, 0.2, 0.3, Vec3f(3, 0.5f, 0))}});
+    const Scene s = sceneOf(
+        {{sphere(16, 24), Transform::Identity()}, {sphere(16, 24), test::rotation(0.1, 0.2, 0.3, Vec3f(3, 0.5f, 0))}});
     const Outcome r = reliable(s, 256, DepthFormat::unorm(24), 8);
     EXPECT_EQ(r.report.collidingTriangles, 0u);
     EXPECT_TRUE(r.result.pcs.empty()) << r.result.pcs.size() << " of " << s.triangleCount();
@@ -369,7 +371,8 @@ TEST(ReliableAcceptance, ZeroFalsePrunesOnGeneratedScenesAcrossResolutionsAndFor
                 o.depth = f;
                 const CullideResult r = runCullide(c.scene, *backend, o);
                 const study::PcsReport rep = study::measurePcs(c.scene, truth, r.pcs, o);
-                EXPECT_EQ(rep.falsePruneCount(), 0u) << c.name << " " << res << " " << f.name() << ": " << describe(rep);
+                EXPECT_EQ(rep.falsePruneCount(), 0u)
+                    << c.name << " " << res << " " << f.name() << ": " << describe(rep);
             }
     }
 }
@@ -412,7 +415,8 @@ TEST(ReliableMethod, DeterministicAcrossThreads) {
         const Outcome r = reliable(s, 96, DepthFormat::unorm(24), 8, axisDirections(), threads);
         EXPECT_EQ(r.result.pcs, one.result.pcs) << threads;
         ASSERT_EQ(r.result.passes.size(), one.result.passes.size());
-        for (size_t i = 0; i < r.result.passes.size(); ++i) EXPECT_EQ(r.result.passes[i].nodesOut, one.result.passes[i].nodesOut);
+        for (size_t i = 0; i < r.result.passes.size(); ++i)
+            EXPECT_EQ(r.result.passes[i].nodesOut, one.result.passes[i].nodesOut);
     }
     EXPECT_EQ(one.report.falsePruneCount(), 0u) << describe(one.report);
 }

@@ -87,12 +87,14 @@ INSTANTIATE_TEST_SUITE_P(
     SceneIo, SceneIoBad,
     ::testing::Values(BadScene{"bad/malformed.json", "malformed JSON at line 3, column 47"},
                       BadScene{"bad/missing_key.json", "objects[0]: missing key 'mesh'"},
-                      BadScene{"bad/wrong_type.json", "objects[0].transform.scale: expected a number or an array of 3 numbers, got string"},
+                      BadScene{"bad/wrong_type.json",
+                               "objects[0].transform.scale: expected a number or an array of 3 numbers, got string"},
                       BadScene{"bad/unknown_key.json", "unknown key 'colour'"},
                       BadScene{"bad/duplicate_name.json", "duplicate object name 'a'"},
                       BadScene{"bad/duplicate_key.json", "duplicate key 'name'"},
                       BadScene{"bad/unknown_object_in_frame.json", "unknown object 'b'"},
-                      BadScene{"bad/wrong_position_count.json", "has 8 vertices, but object 'a' has 7 (wrong position count)"},
+                      BadScene{"bad/wrong_position_count.json",
+                               "has 8 vertices, but object 'a' has 7 (wrong position count)"},
                       BadScene{"bad/missing_mesh.json", "no_such_mesh.off: cannot open: no such file"},
                       BadScene{"bad/nonfinite_transform.json", "is not a finite float"},
                       BadScene{"bad/does_not_exist.json", "no such file"},
@@ -117,7 +119,8 @@ TEST(SceneIo, WriteThenLoadRoundTripsAndIsDeterministic) {
         for (size_t i = 0; i < sa.objects.size(); ++i) {
             EXPECT_EQ(sa.objects[i].name, sb.objects[i].name);
             EXPECT_EQ(sa.objects[i].mesh, sb.objects[i].mesh);
-            EXPECT_EQ(sa.objects[i].transform.matrix(), sb.objects[i].transform.matrix()) << "frame " << f << " object " << i;
+            EXPECT_EQ(sa.objects[i].transform.matrix(), sb.objects[i].transform.matrix())
+                << "frame " << f << " object " << i;
         }
     }
     size_t files = 0;

@@ -38,8 +38,7 @@ Spec smallSpec() {
 
 // Records without their timing columns (and per-call seconds): what must not depend on the run.
 nlohmann::ordered_json withoutTimings(nlohmann::ordered_json r) {
-    for (auto it = r.begin(); it != r.end();)
-        it = isTimingColumn(it.key()) ? r.erase(it) : std::next(it);
+    for (auto it = r.begin(); it != r.end();) it = isTimingColumn(it.key()) ? r.erase(it) : std::next(it);
     for (auto& p : r["passes"]) p.erase("seconds");
     return r;
 }
@@ -115,7 +114,9 @@ TEST(Study, ResumeSkipsDoneRunsAndHealsACutLine) {
     EXPECT_EQ(readRecords(dir / "r.jsonl").size(), 4u);
     // Drop the last record: exactly that run is redone.
     auto recs = readRecords(dir / "r.jsonl");
-    std::ofstream(dir / "r.jsonl", std::ios::trunc) << recs[0].dump() << "\n" << recs[1].dump() << "\n" << recs[2].dump() << "\n";
+    std::ofstream(dir / "r.jsonl", std::ios::trunc) << recs[0].dump() << "\n"
+                                                    << recs[1].dump() << "\n"
+                                                    << recs[2].dump() << "\n";
     EXPECT_EQ(runStudy(o), 1u);
     EXPECT_EQ(readRecords(dir / "r.jsonl").size(), 4u);
 }
@@ -153,7 +154,10 @@ TEST(StudyCauses, NoUnexplainedFalsePrunesOnBundledAndGeneratedScenes) {
     Spec s;
     s.scenes = {std::string(CULLIDE_DATA_DIR) + "/scenes/bunny_through_cow.json@0",
                 std::string(CULLIDE_DATA_DIR) + "/scenes/two_cows_and_bunny.json@0",
-                "bunny:3000", "cows:3000", "cylinders:3000", "twist:3000"};
+                "bunny:3000",
+                "cows:3000",
+                "cylinders:3000",
+                "twist:3000"};
     s.methods = {"original", "modified"};
     s.resolutions = {"100", "500"};
     s.depths = {"16", "24"};
@@ -165,10 +169,11 @@ TEST(StudyCauses, NoUnexplainedFalsePrunesOnBundledAndGeneratedScenes) {
     runStudy(o);
     size_t falsePrunes = 0;
     for (const auto& r : readRecords(o.out)) {
-        EXPECT_EQ(r["fp_unexplained"], 0) << r["scene"] << " " << r["method"] << " " << r["resolution"] << " " << r["depth"];
+        EXPECT_EQ(r["fp_unexplained"], 0)
+            << r["scene"] << " " << r["method"] << " " << r["resolution"] << " " << r["depth"];
         EXPECT_EQ(r["mp_unexplained"], 0) << r["scene"];
         const size_t sum = r["fp_depth_rounding"].get<size_t>() + r["fp_sampling"].get<size_t>() +
-                           r["fp_edge_on"].get<size_t>() + r["fp_untested"].get<size_t>();
+            r["fp_edge_on"].get<size_t>() + r["fp_untested"].get<size_t>();
         EXPECT_EQ(sum, r["false_prunes"].get<size_t>()) << r["scene"];
         falsePrunes += sum;
     }
@@ -301,15 +306,24 @@ TEST(StudyCli, StudyMergeAndPlotFromTheCommandLine) {
     EXPECT_EQ(runCli("study" + common + " --shard 0/2 -o " + (dir / "a.csv").string(), &out), 0) << out;
     EXPECT_EQ(runCli("study" + common + " --shard 1/2 -o " + (dir / "b.csv").string(), &out), 0) << out;
     EXPECT_EQ(runCli("study merge " + (dir / "a.csv").string() + " " + (dir / "b.jsonl").string() + " -o " +
-                     (dir / "m.csv").string(), &out), 0) << out;
+                         (dir / "m.csv").string(),
+                     &out),
+              0)
+        << out;
     EXPECT_EQ(readRecords(dir / "m.csv").size(), 2u);
     if (std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") != 0) GTEST_SKIP() << "no matplotlib";
     {
         std::ofstream bench(dir / "bench.json");
-        bench << R"({"benchmarks": [{"name": "BM_Prune/scene:0/tris:5000", "run_type": "iteration", "real_time": 20.0, "time_unit": "ms"},
-                                   {"name": "BM_Prune/scene:0/tris:270000", "run_type": "iteration", "real_time": 600.0, "time_unit": "ms"}]})";
+        bench << R"({"benchmarks": [)"
+                 R"({"name": "BM_Prune/scene:0/tris:5000", "run_type": "iteration", "real_time": 20.0, "time_unit": "ms"},)"
+                 R"({"name": "BM_Prune/scene:0/tris:270000", "run_type": "iteration", "real_time": 600.0,)"
+                 R"( "time_unit": "ms"}]})";
     }
-    EXPECT_EQ(runCli("plot " + (dir / "m.csv").string() + " " + (dir / "bench.json").string() + " -o " + (dir / "fig").string(), &out), 0) << out;
+    EXPECT_EQ(runCli("plot " + (dir / "m.csv").string() + " " + (dir / "bench.json").string() + " -o " +
+                         (dir / "fig").string(),
+                     &out),
+              0)
+        << out;
     EXPECT_TRUE(fs::exists(dir / "fig" / "speed_vs_accuracy.png")) << out;
     EXPECT_TRUE(fs::exists(dir / "fig" / "figure8_time_vs_triangles.svg")) << out;
     EXPECT_TRUE(fs::exists(dir / "fig" / "bench_bench_vs_triangles.png")) << out;

@@ -9,7 +9,9 @@
 
 namespace cullide::test {
 
-std::string testData(const char* relative) { return std::string(CULLIDE_TEST_DATA_DIR) + "/" + relative; }
+std::string testData(const char* relative) {
+    return std::string(CULLIDE_TEST_DATA_DIR) + "/" + relative;
+}
 
 TempDir::TempDir() {
     static std::atomic<unsigned> counter{0};

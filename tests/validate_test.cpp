@@ -104,7 +104,7 @@ TEST(QueryIntervals, ExactTrackReproducesTheCpuReferenceAndIntervalsContainIt) {
 // Trap: intervals too loose to mean anything: for pixel-aligned, depth-separated boxes nothing
 // is ambiguous, so the interval is the exact count.
 TEST(QueryIntervals, PixelAlignedSeparatedBoxesHaveNoAmbiguity) {
-    std::vector<Vec3f> p = {{2, 2, 0.25f}, {10, 2, 0.25f}, {10, 9, 0.25f}, {2, 9, 0.25f},
+    std::vector<Vec3f> p = {{2, 2, 0.25f}, {10, 2, 0.25f}, {10, 9, 0.25f},  {2, 9, 0.25f},
                             {5, 0, 0.75f}, {16, 0, 0.75f}, {16, 16, 0.75f}, {5, 16, 0.75f}};
     std::vector<Triangle> t = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
     OrthoView v;
@@ -123,15 +123,17 @@ TEST(QueryIntervals, PixelAlignedSeparatedBoxesHaveNoAmbiguity) {
     EXPECT_EQ(r[0].certain, uint64_t(11 * 16 - 5 * 7));
 }
 
-bool glMissing(std::string& why) { return !raster::glBackendAvailable(&why); }
+bool glMissing(std::string& why) {
+    return !raster::glBackendAvailable(&why);
+}
 
-#define GL_OR_SKIP()                                                                  \
-    do {                                                                              \
-        std::string why;                                                              \
-        if (glMissing(why)) {                                                         \
+#define GL_OR_SKIP()                                                                                \
+    do {                                                                                            \
+        std::string why;                                                                            \
+        if (glMissing(why)) {                                                                       \
             if (std::getenv("CULLIDE_REQUIRE_GL") && raster::glBuilt()) FAIL() << "no GL: " << why; \
-            GTEST_SKIP() << "no GL context: " << why;                                \
-        }                                                                             \
+            GTEST_SKIP() << "no GL context: " << why;                                               \
+        }                                                                                           \
     } while (0)
 
 // Trap: GL results outside the intervals on random soups (slivers, steep triangles, every depth
@@ -202,8 +204,8 @@ std::pair<int, std::string> cli(const std::string& args) {
 // Trap: the command exiting 0 when it should report, or not listing what it compared.
 TEST(Validate, CommandReportsRatesAndExitsZeroWhenEverythingIsInside) {
     GL_OR_SKIP();
-    const auto [status, out] =
-        cli("validate '" + std::string(CULLIDE_DATA_DIR) + "/scenes/bunny_through_cow.json' --frame 0 --resolution 128");
+    const auto [status, out] = cli("validate '" + std::string(CULLIDE_DATA_DIR) +
+                                   "/scenes/bunny_through_cow.json' --frame 0 --resolution 128");
     EXPECT_EQ(status, 0) << out;
     EXPECT_NE(out.find("in interval"), std::string::npos) << out;
     EXPECT_NE(out.find("outside 0"), std::string::npos) << out;

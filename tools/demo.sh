@@ -24,8 +24,10 @@ echo "== demo: cullide info over the bundled and generated scenes"
 "$cullide" info data/scenes/*.json data/meshes/*.off out/scenes/*.json
 
 echo "== demo: cullide prune (modified method: self-intersections stay in the PCS)"
-"$cullide" prune out/scenes/bunny_5k.json --check --json out/bunny_5k_pcs.json --out out/bunny_5k_pcs.ply --frames out/bunny_5k_frames || [ $? -eq 1 ]  # 1: --check found false prunes, as the paper says it may
-"$cullide" prune out/scenes/cows_5k.json --check --json out/cows_5k_pcs.json --out out/cows_5k_pcs.ply || [ $? -eq 1 ]  # 1: --check found false prunes, as the paper says it may
+# Exit status 1: --check found false prunes, as the paper says it may.
+"$cullide" prune out/scenes/bunny_5k.json --check --json out/bunny_5k_pcs.json --out out/bunny_5k_pcs.ply \
+  --frames out/bunny_5k_frames || [ $? -eq 1 ]
+"$cullide" prune out/scenes/cows_5k.json --check --json out/cows_5k_pcs.json --out out/cows_5k_pcs.ply || [ $? -eq 1 ]
 echo "== demo: the reliable method (no intersecting triangle is ever pruned), checked against the exact oracle"
 "$cullide" prune out/scenes/cows_5k.json --method reliable --check
 "$cullide" prune data/scenes/bunny_through_cow.json --json out/bunny_through_cow_pcs.json

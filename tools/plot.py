@@ -75,7 +75,8 @@ def read_study(path):
 
 
 def config_label(r):
-    return f"{r['method']} {r['resolution']} {r['depth']} {r['directions']} {r['hierarchy'][:4]}/{r['leaf_size']} {r['backend']}x{r['threads']}"
+    return (f"{r['method']} {r['resolution']} {r['depth']} {r['directions']} "
+            f"{r['hierarchy'][:4]}/{r['leaf_size']} {r['backend']}x{r['threads']}")
 
 
 def speed_vs_accuracy(rows, out):
@@ -207,7 +208,8 @@ def plot_study(path, out):
             if not runs:
                 continue
             small = min(runs, key=lambda r: r["triangles"])
-            c = pass_charts(small["passes"], small["triangles"], f"{small['scene']} ({small['method']})", out, f"figure9_10_{kind}")
+            c = pass_charts(small["passes"], small["triangles"], f"{small['scene']} ({small['method']})", out,
+                            f"figure9_10_{kind}")
             if c:
                 curves.append((f"{small['scene']} ({small['method']})", c))
     figure11(curves, out)

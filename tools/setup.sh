@@ -14,7 +14,8 @@ packages=(
   # oracle: Embree 3 broad phase, CGAL exact predicates (header-only, needs GMP/MPFR, Boost)
   libembree-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
   # tests, benchmarks, command line, scene files, mesh input/output, PNG writer
-  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libtinyobjloader-dev libmeshoptimizer-dev libstb-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libtinyobjloader-dev libmeshoptimizer-dev
+  libstb-dev
   # GL backend: libepoxy for loading, headless EGL with Mesa (llvmpipe when there is no GPU)
   libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
   # charts

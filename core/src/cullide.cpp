@@ -18,7 +18,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double secondsSince(Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 }  // namespace
 
@@ -68,16 +70,18 @@ std::vector<Vec3d> spreadDirections(uint32_t n) {
 void CullideOptions::validate() const {
     if (directions.empty()) throw InputError("option --directions", "no directions given");
     for (const Vec3d& d : directions)
-        if (!d.allFinite() || d.norm() == 0) throw InputError("option --directions", "a direction is zero or not finite");
+        if (!d.allFinite() || d.norm() == 0)
+            throw InputError("option --directions", "a direction is zero or not finite");
     if (width < 1 || width > kMaxViewportSide || height < 1 || height > kMaxViewportSide)
-        throw InputError("option --resolution", "the viewport must be 1 to " + std::to_string(kMaxViewportSide) + " pixels per side, not " +
-                                                    std::to_string(width) + "x" + std::to_string(height));
+        throw InputError("option --resolution",
+                         "the viewport must be 1 to " + std::to_string(kMaxViewportSide) + " pixels per side, not " +
+                             std::to_string(width) + "x" + std::to_string(height));
     if (hierarchy.leafSize < 1) throw InputError("option --leaf-size", "the leaf size must be at least 1");
     if (hierarchy.branching < 2) throw InputError("option --branching", "the branching must be at least 2");
 }
 
-void appendModifiedReducePcs(CommandList& list, std::span<const TriangleRange> ranges,
-                             std::span<uint32_t> forwardQuery, std::span<uint32_t> reverseQuery) {
+void appendModifiedReducePcs(CommandList& list, std::span<const TriangleRange> ranges, std::span<uint32_t> forwardQuery,
+                             std::span<uint32_t> reverseQuery) {
     CULLIDE_CHECK(forwardQuery.size() == ranges.size() && reverseQuery.size() == ranges.size(),
                   "appendModifiedReducePcs: one query slot per range");
     // Forward: write the object, then test it against everything so far, itself included, with
@@ -130,7 +134,8 @@ OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> tr
     const double scale = std::max({std::abs(lo.x()), std::abs(hi.x()), std::abs(lo.y()), std::abs(hi.y()),
                                    std::abs(lo.z()), std::abs(hi.z()), 1e-30});
     const double tiny = scale * 1e-6;
-    const double pixel = std::max({(hi.x() - lo.x()) / width, (hi.y() - lo.y()) / height, tiny / std::max(width, height)});
+    const double pixel =
+        std::max({(hi.x() - lo.x()) / width, (hi.y() - lo.y()) / height, tiny / std::max(width, height)});
     const double cx = 0.5 * (lo.x() + hi.x()), cy = 0.5 * (lo.y() + hi.y());
     view.xmin = cx - 0.5 * pixel * width;
     view.xmax = cx + 0.5 * pixel * width;
@@ -266,7 +271,8 @@ private:
                     leaves.push_back(item(i, k));
                     depth = std::max(depth, h.nodes[k].depth);
                 }
-            std::sort(leaves.begin(), leaves.end(), [](const Item& a, const Item& b) { return a.range.first < b.range.first; });
+            std::sort(leaves.begin(), leaves.end(),
+                      [](const Item& a, const Item& b) { return a.range.first < b.range.first; });
             pcs.insert(pcs.end(), leaves.begin(), leaves.end());
         }
         result.levels = pcs.empty() ? 0 : 1;
@@ -295,7 +301,8 @@ private:
         const auto start = Clock::now();
         ranges_.clear();
         for (const Item& it : pcs) ranges_.push_back(it.range);
-        backend_.setView(fitView(positions_, triangles_, ranges_, opt_.directions[d], opt_.width, opt_.height, opt_.depth));
+        backend_.setView(
+            fitView(positions_, triangles_, ranges_, opt_.directions[d], opt_.width, opt_.height, opt_.depth));
         const uint32_t n = uint32_t(pcs.size());
         const detail::UnitGraph g = detail::unitAdjacency(triangles_, ranges_);
         const std::vector<uint32_t> colour = detail::distanceTwoColouring(g);
@@ -356,7 +363,8 @@ private:
         const auto start = Clock::now();
         ranges_.clear();
         for (const Item& it : pcs) ranges_.push_back(it.range);
-        backend_.setView(fitView(positions_, triangles_, ranges_, opt_.directions[d], opt_.width, opt_.height, opt_.depth));
+        backend_.setView(
+            fitView(positions_, triangles_, ranges_, opt_.directions[d], opt_.width, opt_.height, opt_.depth));
 
         list_.reset();
         // forwardQuery[i] / reverseQuery[i]: the query numbers of PCS item i in each pass.
@@ -437,8 +445,9 @@ private:
 CullideResult runCullide(const Scene& scene, DepthBackend& backend, const CullideOptions& options) {
     options.validate();
     if (options.method == CullMethod::Reliable && !backend.supportsConservative())
-        throw InputError("option --method", "reliable is CPU-only: this backend (" + backend.describe() +
-                                                ") has no conservative rasterization");
+        throw InputError(
+            "option --method",
+            "reliable is CPU-only: this backend (" + backend.describe() + ") has no conservative rasterization");
     return Culler(scene, backend, options).run();
 }
 

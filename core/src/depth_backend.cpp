@@ -32,8 +32,7 @@ const char* toString(DepthFunc f) {
 // DepthFormat
 
 DepthFormat DepthFormat::unorm(int n) {
-    if (n < 8 || n > 32)
-        throw InputError("depth format", "unorm depth needs 8 to 32 bits, got " + std::to_string(n));
+    if (n < 8 || n > 32) throw InputError("depth format", "unorm depth needs 8 to 32 bits, got " + std::to_string(n));
     return {Kind::Unorm, n};
 }
 
@@ -42,12 +41,10 @@ DepthFormat DepthFormat::parse(const std::string& text) {
     for (char c : text) t.push_back(char(std::tolower(static_cast<unsigned char>(c))));
     if (t == "float" || t == "f32" || t == "d32f" || t == "float32") return float32();
     std::string digits = t;
-    if (digits.rfind("unorm", 0) == 0)
-        digits = digits.substr(5);
-    else if (digits.rfind("d", 0) == 0)
-        digits = digits.substr(1);
+    if (digits.rfind("unorm", 0) == 0) digits = digits.substr(5);
+    else if (digits.rfind("d", 0) == 0) digits = digits.substr(1);
     const bool numeric = !digits.empty() && digits.size() <= 2 &&
-                         std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
+        std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
     if (!numeric)
         throw InputError("depth format", "'" + text + "' is not a depth format (use 8..32, d24, unorm16, float, d32f)");
     return unorm(std::stoi(digits));
@@ -72,9 +69,13 @@ namespace {
 
 // right.p etc., evaluated left to right in double (written out so that no backend depends on how
 // Eigen vectorizes a dot product).
-inline double dot3(const Vec3d& a, double x, double y, double z) { return a.x() * x + a.y() * y + a.z() * z; }
+inline double dot3(const Vec3d& a, double x, double y, double z) {
+    return a.x() * x + a.y() * y + a.z() * z;
+}
 
-bool finite3(const Vec3d& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+bool finite3(const Vec3d& v) {
+    return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
+}
 
 }  // namespace
 
@@ -103,7 +104,8 @@ void OrthoView::validate() const {
     if (!finite3(right) || !finite3(up) || !finite3(dir))
         throw InputError("view", "the view frame has a non-finite component");
     constexpr double tol = 1e-9;
-    const bool unit = std::abs(right.norm() - 1) < tol && std::abs(up.norm() - 1) < tol && std::abs(dir.norm() - 1) < tol;
+    const bool unit =
+        std::abs(right.norm() - 1) < tol && std::abs(up.norm() - 1) < tol && std::abs(dir.norm() - 1) < tol;
     const bool ortho = std::abs(right.dot(up)) < tol && std::abs(right.dot(dir)) < tol && std::abs(up.dot(dir)) < tol;
     if (!unit || !ortho) throw InputError("view", "the view frame (right, up, dir) is not orthonormal");
     if (right.cross(up).dot(dir) < 0) throw InputError("view", "the view frame (right, up, dir) is left-handed");
@@ -114,8 +116,9 @@ void OrthoView::validate() const {
     if (!std::isfinite(xmax - xmin) || !std::isfinite(ymax - ymin) || !std::isfinite(zfar - znear))
         throw InputError("view", "the view box is too large");
     if (width < 1 || width > kMaxViewportSide || height < 1 || height > kMaxViewportSide)
-        throw InputError("view", "the viewport must be 1.." + std::to_string(kMaxViewportSide) +
-                                     " pixels per side, got " + std::to_string(width) + "x" + std::to_string(height));
+        throw InputError("view",
+                         "the viewport must be 1.." + std::to_string(kMaxViewportSide) + " pixels per side, got " +
+                             std::to_string(width) + "x" + std::to_string(height));
     if (depth.kind == DepthFormat::Kind::Unorm && (depth.bits < 8 || depth.bits > 32))
         throw InputError("view", "unorm depth needs 8 to 32 bits, got " + std::to_string(depth.bits));
     if (depth.kind == DepthFormat::Kind::Float32 && depth.bits != 32)
@@ -147,8 +150,8 @@ void CommandList::depthMask(bool write) {
 
 uint32_t CommandList::beginQuery(QueryKind kind) {
     if (inQuery_)
-        throw InputError("command list", "beginQuery() while query " + std::to_string(queries_ - 1) +
-                                             " is open (queries do not nest)");
+        throw InputError("command list",
+                         "beginQuery() while query " + std::to_string(queries_ - 1) + " is open (queries do not nest)");
     Command c{Command::Op::BeginQuery};
     c.queryKind = kind;
     commands_.push_back(c);
@@ -168,8 +171,9 @@ namespace {
 // overflows 32-bit triangle indices.
 Command drawCommand(Command::Op op, uint32_t first, uint32_t count) {
     if (uint64_t(first) + count > std::numeric_limits<uint32_t>::max())
-        throw InputError("command list", "draw range [" + std::to_string(first) + ", +" + std::to_string(count) +
-                                             ") overflows 32-bit triangle indices");
+        throw InputError("command list",
+                         "draw range [" + std::to_string(first) + ", +" + std::to_string(count) +
+                             ") overflows 32-bit triangle indices");
     Command c{op};
     c.first = first;
     c.count = count;

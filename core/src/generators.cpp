@@ -32,9 +32,13 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 // Uniform double in [0, 1): the top 53 bits of one mt19937_64 draw, scaled exactly.
-double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+double uniform01(std::mt19937_64& rng) {
+    return static_cast<double>(rng() >> 11) * 0x1.0p-53;
+}
 
-double uniform(std::mt19937_64& rng, double lo, double hi) { return lo + (hi - lo) * uniform01(rng); }
+double uniform(std::mt19937_64& rng, double lo, double hi) {
+    return lo + (hi - lo) * uniform01(rng);
+}
 
 double smoothstep(double x) {
     if (x <= 0.0) return 0.0;
@@ -42,13 +46,19 @@ double smoothstep(double x) {
     return x * x * (3.0 - 2.0 * x);
 }
 
-Vec3d toD(const Vec3f& p) { return Vec3d(double(p.x()), double(p.y()), double(p.z())); }
-Vec3f toF(const Vec3d& p) { return Vec3f(float(p.x()), float(p.y()), float(p.z())); }
+Vec3d toD(const Vec3f& p) {
+    return Vec3d(double(p.x()), double(p.y()), double(p.z()));
+}
+Vec3f toF(const Vec3d& p) {
+    return Vec3f(float(p.x()), float(p.y()), float(p.z()));
+}
 
 Vec3d cross(const Vec3d& a, const Vec3d& b) {
     return Vec3d(a.y() * b.z() - a.z() * b.y(), a.z() * b.x() - a.x() * b.z(), a.x() * b.y() - a.y() * b.x());
 }
-double dot(const Vec3d& a, const Vec3d& b) { return (a.x() * b.x() + a.y() * b.y()) + a.z() * b.z(); }
+double dot(const Vec3d& a, const Vec3d& b) {
+    return (a.x() * b.x() + a.y() * b.y()) + a.z() * b.z();
+}
 Vec3d normalized(const Vec3d& a) {
     const double n = std::sqrt(dot(a, a));
     return Vec3d(a.x() / n, a.y() / n, a.z() / n);
@@ -70,7 +80,9 @@ Vec3f addDelta(const Vec3f& p, const Vec3d& d) {
 }
 
 // Animation parameter of frame f of n (0 at the first frame, 1 at the last; 1 for a single frame).
-double ramp(size_t f, size_t n) { return n > 1 ? double(f) / double(n - 1) : 1.0; }
+double ramp(size_t f, size_t n) {
+    return n > 1 ? double(f) / double(n - 1) : 1.0;
+}
 
 // One deforming object: `triangles` with positions shape(1) in the base scene and
 // shape(ramp(f, frames)) in frame f.
@@ -108,7 +120,9 @@ Mesh compact(const std::vector<Vec3f>& positions, const std::vector<unsigned int
     return out;
 }
 
-size_t distance(size_t a, size_t b) { return a > b ? a - b : b - a; }
+size_t distance(size_t a, size_t b) {
+    return a > b ? a - b : b - a;
+}
 
 }  // namespace
 
@@ -214,12 +228,12 @@ namespace {
 constexpr double kEarBendDegrees = 100.0;
 
 struct EarBend {
-    Vec3d pivot;        // the ear's root
-    Vec3d direction;    // unit vector from the root towards the ear tip
-    Vec3d axis;         // unit rotation axis
-    double angle;       // full bend angle (radians)
-    double h0, h1;      // along `direction`: no rotation below h0, full rotation above h1
-    double r0, r1;      // distance from the ear's line: full rotation inside r0, none beyond r1
+    Vec3d pivot;  // the ear's root
+    Vec3d direction;  // unit vector from the root towards the ear tip
+    Vec3d axis;  // unit rotation axis
+    double angle;  // full bend angle (radians)
+    double h0, h1;  // along `direction`: no rotation below h0, full rotation above h1
+    double r0, r1;  // distance from the ear's line: full rotation inside r0, none beyond r1
 };
 
 EarBend earBendFor(const Bounds& box) {
@@ -229,7 +243,7 @@ EarBend earBendFor(const Bounds& box) {
     };
     const double unit = ext.y() / 9.658;  // the bundled bunny's height
     EarBend b;
-    b.pivot = at(0.3087, 0.7769, 0.508);        // about (-1.9, 7.5, 0.1)
+    b.pivot = at(0.3087, 0.7769, 0.508);  // about (-1.9, 7.5, 0.1)
     const Vec3d tip = at(0.5208, 0.9943, 0.362);  // about (0.2, 9.6, -1.0)
     const Vec3d target = at(0.5809, 0.5180, 0.574);  // inside the back: about (0.8, 5.0, 0.6)
     const Vec3d d1 = tip - b.pivot, d2 = target - b.pivot;
@@ -329,8 +343,8 @@ namespace {
 
 struct Tube {
     Vec3d centre, axis, u, v;  // u, v, axis: orthonormal
-    Vec3d bowDir;              // unit, perpendicular to axis
-    double bow;                // full bow amplitude (at the middle of the tube)
+    Vec3d bowDir;  // unit, perpendicular to axis
+    double bow;  // full bow amplitude (at the middle of the tube)
 };
 
 constexpr double kTubeLength = 0.6;

@@ -106,7 +106,8 @@ private:
     uint32_t uniform(uint32_t bound) {  // in [0, bound), by rejection: unbiased, portable
         const uint64_t limit = std::numeric_limits<uint64_t>::max() - std::numeric_limits<uint64_t>::max() % bound;
         uint64_t x;
-        do x = rng_(); while (x >= limit);
+        do x = rng_();
+        while (x >= limit);
         return uint32_t(x % bound);
     }
 

@@ -25,8 +25,9 @@ void validateMesh(const Mesh& mesh, const std::string& source) {
     for (size_t i = 0; i < mesh.triangles.size(); ++i)
         for (uint32_t v : mesh.triangles[i])
             if (v >= n)
-                throw InputError(source, "triangle " + std::to_string(i) + " refers to vertex " + std::to_string(v) +
-                                             ", but the mesh has only " + std::to_string(n) + " vertices");
+                throw InputError(source,
+                                 "triangle " + std::to_string(i) + " refers to vertex " + std::to_string(v) +
+                                     ", but the mesh has only " + std::to_string(n) + " vertices");
 }
 
 }  // namespace cullide

@@ -40,7 +40,9 @@
 namespace cullide::meshio {
 
 bool onlyWhitespace(std::string_view s) {
-    return std::all_of(s.begin(), s.end(), [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v'; });
+    return std::all_of(s.begin(), s.end(), [](char c) {
+        return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
+    });
 }
 
 NumStatus parseFloatToken(std::string_view tok, float& out) {
@@ -109,7 +111,9 @@ void splitTokens(std::string_view s, std::vector<std::string_view>& out) {
     }
 }
 
-std::string atLine(size_t n) { return "line " + std::to_string(n) + ": "; }
+std::string atLine(size_t n) {
+    return "line " + std::to_string(n) + ": ";
+}
 
 void addFan(Mesh& mesh, const uint32_t* idx, size_t n) {
     for (size_t k = 1; k + 1 < n; ++k) mesh.triangles.push_back({idx[0], idx[k], idx[k + 1]});
@@ -133,7 +137,8 @@ void appendUint(std::string& out, unsigned long long x) {
 
 void checkIndices(const Mesh& mesh) {
     for (const Triangle& t : mesh.triangles)
-        for (uint32_t v : t) CULLIDE_CHECK(v < mesh.positions.size(), "writing a mesh with a triangle index out of range");
+        for (uint32_t v : t)
+            CULLIDE_CHECK(v < mesh.positions.size(), "writing a mesh with a triangle index out of range");
 }
 
 }  // namespace cullide::meshio
@@ -141,7 +146,6 @@ void checkIndices(const Mesh& mesh) {
 namespace cullide {
 
 namespace fs = std::filesystem;
-
 
 MeshFormat meshFormatFromPath(const fs::path& path) {
     std::string ext = path.extension().string();
@@ -159,10 +163,10 @@ Mesh loadMesh(const fs::path& path) {
     const std::string data = readFile(path);
     Mesh mesh;
     switch (format) {
-    case MeshFormat::Obj: mesh = meshio::readObj(src, data); break;
-    case MeshFormat::Off: mesh = meshio::readOff(src, data); break;
-    case MeshFormat::Ply: mesh = meshio::readPly(src, data); break;
-    case MeshFormat::Stl: mesh = meshio::readStl(src, data); break;
+        case MeshFormat::Obj: mesh = meshio::readObj(src, data); break;
+        case MeshFormat::Off: mesh = meshio::readOff(src, data); break;
+        case MeshFormat::Ply: mesh = meshio::readPly(src, data); break;
+        case MeshFormat::Stl: mesh = meshio::readStl(src, data); break;
     }
     validateMesh(mesh, src);
     return mesh;

@@ -26,7 +26,6 @@ bool parseIntToken(std::string_view tok, long long& out);
 // The token quoted for a message: at most 40 characters, non-printable ones as '?'.
 std::string quote(std::string_view tok);
 
-
 // ---------------------------------------------------------------------------------------------
 // Lines and tokens for the ascii formats. Lines end at '\n', '\r' or "\r\n"; `#` starts a comment
 // in OFF and OBJ (not in PLY, where comments are header lines).

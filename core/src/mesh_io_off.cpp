@@ -8,7 +8,6 @@
 
 namespace cullide::meshio {
 
-
 // ---------------------------------------------------------------------------------------------
 // OFF: [ST][C][N]OFF keyword (optional), then "nv nf [ne]", nv vertex lines (x y z, anything after
 // is colour/normal data and ignored), nf face lines ("n i0 .. in-1", anything after is colour).
@@ -36,8 +35,9 @@ Mesh readOff(const std::string& src, std::string_view data) {
             if (pre.starts_with("C")) pre.remove_prefix(1);
             if (pre.starts_with("N")) pre.remove_prefix(1);
             if (!pre.empty())
-                throw InputError(src, atLine(line.number) + "unsupported OFF variant " + quote(kw) +
-                                          " (only [ST][C][N]OFF, three-dimensional)");
+                throw InputError(src,
+                                 atLine(line.number) + "unsupported OFF variant " + quote(kw) +
+                                     " (only [ST][C][N]OFF, three-dimensional)");
             first = 1;
         }
     }
@@ -58,15 +58,21 @@ Mesh readOff(const std::string& src, std::string_view data) {
     mesh.triangles.reserve(boundedReserve(nf, data.size(), 8));
     for (long long i = 0; i < nv; ++i) {
         nextContent(("vertex " + std::to_string(i) + " (the header says " + std::to_string(nv) + " vertices)").c_str());
-        if (tok.size() < 3) throw InputError(src, atLine(line.number) + "parse error: vertex " + std::to_string(i) + " has fewer than 3 coordinates");
+        if (tok.size() < 3)
+            throw InputError(
+                src,
+                atLine(line.number) + "parse error: vertex " + std::to_string(i) + " has fewer than 3 coordinates");
         Vec3f p;
         for (int k = 0; k < 3; ++k) {
             const NumStatus s = parseFloatToken(tok[k], p[k]);
             if (s == NumStatus::Invalid)
-                throw InputError(src, atLine(line.number) + "parse error: " + quote(tok[k]) + " is not a number (vertex " + std::to_string(i) + ")");
+                throw InputError(src,
+                                 atLine(line.number) + "parse error: " + quote(tok[k]) + " is not a number (vertex " +
+                                     std::to_string(i) + ")");
             if (s == NumStatus::OutOfRange)
-                throw InputError(src, atLine(line.number) + "vertex " + std::to_string(i) + " coordinate " + quote(tok[k]) +
-                                          " is out of float range (not finite)");
+                throw InputError(src,
+                                 atLine(line.number) + "vertex " + std::to_string(i) + " coordinate " + quote(tok[k]) +
+                                     " is out of float range (not finite)");
         }
         mesh.positions.push_back(p);
     }
@@ -75,23 +81,33 @@ Mesh readOff(const std::string& src, std::string_view data) {
         nextContent(("face " + std::to_string(f) + " (the header says " + std::to_string(nf) + " faces)").c_str());
         long long n = 0;
         if (!parseIntToken(tok[0], n))
-            throw InputError(src, atLine(line.number) + "parse error: face " + std::to_string(f) + " does not start with a vertex count");
+            throw InputError(
+                src,
+                atLine(line.number) + "parse error: face " + std::to_string(f) + " does not start with a vertex count");
         if (n < 3)
-            throw InputError(src, atLine(line.number) + "face " + std::to_string(f) + " has " + std::to_string(n) +
-                                      " vertices; a face needs at least 3");
+            throw InputError(src,
+                             atLine(line.number) + "face " + std::to_string(f) + " has " + std::to_string(n) +
+                                 " vertices; a face needs at least 3");
         if (static_cast<unsigned long long>(n) > tok.size() - 1)
-            throw InputError(src, atLine(line.number) + "parse error: face " + std::to_string(f) + " announces " + std::to_string(n) +
-                                      " vertices but lists " + std::to_string(tok.size() - 1));
+            throw InputError(src,
+                             atLine(line.number) + "parse error: face " + std::to_string(f) + " announces " +
+                                 std::to_string(n) + " vertices but lists " + std::to_string(tok.size() - 1));
         face.clear();
         for (long long k = 0; k < n; ++k) {
             long long idx;
             if (!parseIntToken(tok[1 + k], idx))
-                throw InputError(src, atLine(line.number) + "parse error: " + quote(tok[1 + k]) + " is not a vertex index (face " + std::to_string(f) + ")");
+                throw InputError(src,
+                                 atLine(line.number) + "parse error: " + quote(tok[1 + k]) +
+                                     " is not a vertex index (face " + std::to_string(f) + ")");
             if (idx < 0)
-                throw InputError(src, atLine(line.number) + "face " + std::to_string(f) + " has a negative vertex index " + std::to_string(idx));
+                throw InputError(src,
+                                 atLine(line.number) + "face " + std::to_string(f) + " has a negative vertex index " +
+                                     std::to_string(idx));
             if (idx >= nv)
-                throw InputError(src, atLine(line.number) + "face " + std::to_string(f) + " refers to vertex " + std::to_string(idx) +
-                                          ", but the file has only " + std::to_string(nv) + " vertices (index out of range)");
+                throw InputError(src,
+                                 atLine(line.number) + "face " + std::to_string(f) + " refers to vertex " +
+                                     std::to_string(idx) + ", but the file has only " + std::to_string(nv) +
+                                     " vertices (index out of range)");
             face.push_back(static_cast<uint32_t>(idx));
         }
         // Whatever follows the indices on the line is a face colour, which we do not keep.
@@ -100,8 +116,9 @@ Mesh readOff(const std::string& src, std::string_view data) {
     while (lines.next(line)) {
         splitTokens(stripComment(line.text), tok);
         if (!tok.empty())
-            throw InputError(src, atLine(line.number) + "unexpected content after the last face (the header says " +
-                                      std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces)");
+            throw InputError(src,
+                             atLine(line.number) + "unexpected content after the last face (the header says " +
+                                 std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces)");
     }
     return mesh;
 }
@@ -118,20 +135,27 @@ void writeOff(const Mesh& mesh, const fs::path& path) {
     std::string out;
     out.reserve(32 + mesh.positions.size() * 36 + mesh.triangles.size() * 24);
     out += "OFF\n";
-    appendUint(out, mesh.positions.size()); out += ' ';
-    appendUint(out, mesh.triangles.size()); out += " 0\n";
+    appendUint(out, mesh.positions.size());
+    out += ' ';
+    appendUint(out, mesh.triangles.size());
+    out += " 0\n";
     for (const Vec3f& p : mesh.positions) {
-        appendFloat(out, p.x()); out += ' ';
-        appendFloat(out, p.y()); out += ' ';
-        appendFloat(out, p.z()); out += '\n';
+        appendFloat(out, p.x());
+        out += ' ';
+        appendFloat(out, p.y());
+        out += ' ';
+        appendFloat(out, p.z());
+        out += '\n';
     }
     for (const Triangle& t : mesh.triangles) {
         out += '3';
-        for (uint32_t v : t) { out += ' '; appendUint(out, v); }
+        for (uint32_t v : t) {
+            out += ' ';
+            appendUint(out, v);
+        }
         out += '\n';
     }
     writeFileAtomically(path, out);
 }
-
 
 }  // namespace cullide

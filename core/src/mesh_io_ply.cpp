@@ -23,26 +23,35 @@ enum class PlyType { I8, U8, I16, U16, I32, U32, F32, F64 };
 
 bool plyTypeFromName(std::string_view n, PlyType& t) {
     static const std::pair<std::string_view, PlyType> names[] = {
-        {"char", PlyType::I8},     {"int8", PlyType::I8},     {"uchar", PlyType::U8},   {"uint8", PlyType::U8},
-        {"short", PlyType::I16},   {"int16", PlyType::I16},   {"ushort", PlyType::U16}, {"uint16", PlyType::U16},
-        {"int", PlyType::I32},     {"int32", PlyType::I32},   {"uint", PlyType::U32},   {"uint32", PlyType::U32},
-        {"float", PlyType::F32},   {"float32", PlyType::F32}, {"double", PlyType::F64}, {"float64", PlyType::F64}};
+        {"char", PlyType::I8},   {"int8", PlyType::I8},     {"uchar", PlyType::U8},   {"uint8", PlyType::U8},
+        {"short", PlyType::I16}, {"int16", PlyType::I16},   {"ushort", PlyType::U16}, {"uint16", PlyType::U16},
+        {"int", PlyType::I32},   {"int32", PlyType::I32},   {"uint", PlyType::U32},   {"uint32", PlyType::U32},
+        {"float", PlyType::F32}, {"float32", PlyType::F32}, {"double", PlyType::F64}, {"float64", PlyType::F64}};
     for (const auto& [name, type] : names)
-        if (n == name) { t = type; return true; }
+        if (n == name) {
+            t = type;
+            return true;
+        }
     return false;
 }
 
 size_t plyTypeSize(PlyType t) {
     switch (t) {
-    case PlyType::I8: case PlyType::U8: return 1;
-    case PlyType::I16: case PlyType::U16: return 2;
-    case PlyType::I32: case PlyType::U32: case PlyType::F32: return 4;
-    case PlyType::F64: return 8;
+        case PlyType::I8:
+        case PlyType::U8: return 1;
+        case PlyType::I16:
+        case PlyType::U16: return 2;
+        case PlyType::I32:
+        case PlyType::U32:
+        case PlyType::F32: return 4;
+        case PlyType::F64: return 8;
     }
     return 0;
 }
 
-bool plyTypeIsInteger(PlyType t) { return t != PlyType::F32 && t != PlyType::F64; }
+bool plyTypeIsInteger(PlyType t) {
+    return t != PlyType::F32 && t != PlyType::F64;
+}
 
 struct PlyProperty {
     std::string name;
@@ -62,7 +71,7 @@ struct PlyValue {
     bool isInteger = true;
     long long i = 0;
     double d = 0;  // for F64
-    float f = 0;   // for F32
+    float f = 0;  // for F32
     bool isF32 = false;
 };
 
@@ -94,7 +103,10 @@ private:
         }
         if (pos_ >= body_.size()) return false;
         size_t e = pos_;
-        while (e < body_.size() && !(body_[e] == ' ' || body_[e] == '\t' || body_[e] == '\n' || body_[e] == '\r' || body_[e] == '\f' || body_[e] == '\v')) ++e;
+        while (e < body_.size() &&
+               !(body_[e] == ' ' || body_[e] == '\t' || body_[e] == '\n' || body_[e] == '\r' || body_[e] == '\f' ||
+                 body_[e] == '\v'))
+            ++e;
         tok = body_.substr(pos_, e - pos_);
         pos_ = e;
         return true;
@@ -106,7 +118,8 @@ private:
         PlyValue v;
         if (plyTypeIsInteger(t)) {
             if (!parseIntToken(tok, v.i))
-                throw InputError(src_, atLine(line_) + "parse error: " + quote(tok) + " is not an integer (" + what + ")");
+                throw InputError(src_,
+                                 atLine(line_) + "parse error: " + quote(tok) + " is not an integer (" + what + ")");
             return v;
         }
         v.isInteger = false;
@@ -126,21 +139,59 @@ private:
 
     PlyValue readBinary(PlyType t, const std::string& what) {
         const size_t n = plyTypeSize(t);
-        if (body_.size() - pos_ < n) throw InputError(src_, "the file ends inside " + what + " (truncated binary data)");
+        if (body_.size() - pos_ < n)
+            throw InputError(src_, "the file ends inside " + what + " (truncated binary data)");
         unsigned char b[8];
         std::memcpy(b, body_.data() + pos_, n);
         pos_ += n;
         if (big_ != (std::endian::native == std::endian::big)) std::reverse(b, b + n);
         PlyValue v;
         switch (t) {
-        case PlyType::I8: { int8_t x; std::memcpy(&x, b, 1); v.i = x; break; }
-        case PlyType::U8: { uint8_t x; std::memcpy(&x, b, 1); v.i = x; break; }
-        case PlyType::I16: { int16_t x; std::memcpy(&x, b, 2); v.i = x; break; }
-        case PlyType::U16: { uint16_t x; std::memcpy(&x, b, 2); v.i = x; break; }
-        case PlyType::I32: { int32_t x; std::memcpy(&x, b, 4); v.i = x; break; }
-        case PlyType::U32: { uint32_t x; std::memcpy(&x, b, 4); v.i = x; break; }
-        case PlyType::F32: v.isInteger = false; v.isF32 = true; std::memcpy(&v.f, b, 4); break;
-        case PlyType::F64: v.isInteger = false; std::memcpy(&v.d, b, 8); break;
+            case PlyType::I8: {
+                int8_t x;
+                std::memcpy(&x, b, 1);
+                v.i = x;
+                break;
+            }
+            case PlyType::U8: {
+                uint8_t x;
+                std::memcpy(&x, b, 1);
+                v.i = x;
+                break;
+            }
+            case PlyType::I16: {
+                int16_t x;
+                std::memcpy(&x, b, 2);
+                v.i = x;
+                break;
+            }
+            case PlyType::U16: {
+                uint16_t x;
+                std::memcpy(&x, b, 2);
+                v.i = x;
+                break;
+            }
+            case PlyType::I32: {
+                int32_t x;
+                std::memcpy(&x, b, 4);
+                v.i = x;
+                break;
+            }
+            case PlyType::U32: {
+                uint32_t x;
+                std::memcpy(&x, b, 4);
+                v.i = x;
+                break;
+            }
+            case PlyType::F32:
+                v.isInteger = false;
+                v.isF32 = true;
+                std::memcpy(&v.f, b, 4);
+                break;
+            case PlyType::F64:
+                v.isInteger = false;
+                std::memcpy(&v.d, b, 8);
+                break;
         }
         return v;
     }
@@ -158,7 +209,6 @@ float plyValueAsFloat(const PlyValue& v) {
     return v.isF32 ? v.f : static_cast<float>(v.d);
 }
 
-
 template <class T>
 void appendLe(std::string& out, T value) {
     unsigned char b[sizeof(T)];
@@ -174,7 +224,8 @@ Mesh readPly(const std::string& src, std::string_view data) {
     LineReader lines(data);
     Line line;
     std::vector<std::string_view> tok;
-    if (!lines.next(line) || line.text != "ply") throw InputError(src, "parse error: not a PLY file (no 'ply' magic line)");
+    if (!lines.next(line) || line.text != "ply")
+        throw InputError(src, "parse error: not a PLY file (no 'ply' magic line)");
     enum class Format { None, Ascii, Le, Be } format = Format::None;
     std::vector<PlyElement> elements;
     bool ended = false;
@@ -185,7 +236,10 @@ Mesh readPly(const std::string& src, std::string_view data) {
         if (kw == "comment" || kw == "obj_info") continue;
         if (kw == "format") {
             if (tok.size() != 3 || tok[2] != "1.0")
-                throw InputError(src, atLine(line.number) + "parse error: expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
+                throw InputError(
+                    src,
+                    atLine(line.number) +
+                        "parse error: expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
             if (tok[1] == "ascii") format = Format::Ascii;
             else if (tok[1] == "binary_little_endian") format = Format::Le;
             else if (tok[1] == "binary_big_endian") format = Format::Be;
@@ -195,15 +249,18 @@ Mesh readPly(const std::string& src, std::string_view data) {
             if (tok.size() != 3 || !parseIntToken(tok[2], count) || count < 0)
                 throw InputError(src, atLine(line.number) + "parse error: expected 'element <name> <count>'");
             for (const PlyElement& e : elements)
-                if (e.name == tok[1]) throw InputError(src, atLine(line.number) + "element " + quote(tok[1]) + " is declared twice");
+                if (e.name == tok[1])
+                    throw InputError(src, atLine(line.number) + "element " + quote(tok[1]) + " is declared twice");
             elements.push_back({std::string(tok[1]), static_cast<unsigned long long>(count), {}});
         } else if (kw == "property") {
-            if (elements.empty()) throw InputError(src, atLine(line.number) + "parse error: property before any element");
+            if (elements.empty())
+                throw InputError(src, atLine(line.number) + "parse error: property before any element");
             PlyProperty p;
             bool ok;
             if (tok.size() == 5 && tok[1] == "list") {
                 p.isList = true;
-                ok = plyTypeFromName(tok[2], p.countType) && plyTypeFromName(tok[3], p.type) && plyTypeIsInteger(p.countType);
+                ok = plyTypeFromName(tok[2], p.countType) && plyTypeFromName(tok[3], p.type) &&
+                    plyTypeIsInteger(p.countType);
                 p.name = tok[4];
             } else {
                 ok = tok.size() == 3 && plyTypeFromName(tok[1], p.type);
@@ -211,7 +268,8 @@ Mesh readPly(const std::string& src, std::string_view data) {
             }
             if (!ok) throw InputError(src, atLine(line.number) + "parse error: bad property declaration");
             for (const PlyProperty& q : elements.back().properties)
-                if (q.name == p.name) throw InputError(src, atLine(line.number) + "property " + quote(p.name) + " is declared twice");
+                if (q.name == p.name)
+                    throw InputError(src, atLine(line.number) + "property " + quote(p.name) + " is declared twice");
             elements.back().properties.push_back(p);
         } else if (kw == "end_header") {
             if (tok.size() != 1) throw InputError(src, atLine(line.number) + "parse error: junk after end_header");
@@ -234,7 +292,8 @@ Mesh readPly(const std::string& src, std::string_view data) {
                 const PlyProperty& p = e.properties[i];
                 int* slot = p.name == "x" ? &px : p.name == "y" ? &py : p.name == "z" ? &pz : nullptr;
                 if (slot) {
-                    if (p.isList) throw InputError(src, "vertex property " + quote(p.name) + " is a list, expected a scalar");
+                    if (p.isList)
+                        throw InputError(src, "vertex property " + quote(p.name) + " is a list, expected a scalar");
                     *slot = static_cast<int>(i);
                 }
             }
@@ -255,7 +314,8 @@ Mesh readPly(const std::string& src, std::string_view data) {
     if (px < 0 || py < 0 || pz < 0) throw InputError(src, "the vertex element lacks an x, y or z property");
     if (!faceEl) throw InputError(src, "no 'face' element (zero triangles)");
     if (plist < 0) throw InputError(src, "the face element has no vertex_indices list");
-    if (vertexEl->count > kMaxVertices) throw InputError(src, "too many vertices (" + std::to_string(vertexEl->count) + ")");
+    if (vertexEl->count > kMaxVertices)
+        throw InputError(src, "too many vertices (" + std::to_string(vertexEl->count) + ")");
 
     const std::string_view body = data.substr(lines.position());
     const bool ascii = format == Format::Ascii;
@@ -272,7 +332,8 @@ Mesh readPly(const std::string& src, std::string_view data) {
             Vec3f p = Vec3f::Zero();
             for (size_t k = 0; k < e.properties.size(); ++k) {
                 const PlyProperty& prop = e.properties[k];
-                const std::string what = "element '" + e.name + "' " + std::to_string(i) + ", property '" + prop.name + "'";
+                const std::string what =
+                    "element '" + e.name + "' " + std::to_string(i) + ", property '" + prop.name + "'";
                 if (!prop.isList) {
                     const PlyValue v = in.read(prop.type, what);
                     if (isVertex) {
@@ -286,16 +347,21 @@ Mesh readPly(const std::string& src, std::string_view data) {
                 if (c.i < 0) throw InputError(src, what + ": negative list length");
                 const bool indices = isFace && static_cast<int>(k) == plist;
                 if (indices && c.i < 3)
-                    throw InputError(src, "face " + std::to_string(i) + " has " + std::to_string(c.i) + " vertices; a face needs at least 3");
+                    throw InputError(src,
+                                     "face " + std::to_string(i) + " has " + std::to_string(c.i) +
+                                         " vertices; a face needs at least 3");
                 face.clear();
                 for (long long j = 0; j < c.i; ++j) {
                     const PlyValue v = in.read(prop.type, what);
                     if (!indices) continue;
                     if (v.i < 0)
-                        throw InputError(src, "face " + std::to_string(i) + " has a negative vertex index " + std::to_string(v.i));
+                        throw InputError(
+                            src, "face " + std::to_string(i) + " has a negative vertex index " + std::to_string(v.i));
                     if (static_cast<unsigned long long>(v.i) >= vertexEl->count)
-                        throw InputError(src, "face " + std::to_string(i) + " refers to vertex " + std::to_string(v.i) + ", but the file has only " +
-                                                  std::to_string(vertexEl->count) + " vertices (index out of range)");
+                        throw InputError(src,
+                                         "face " + std::to_string(i) + " refers to vertex " + std::to_string(v.i) +
+                                             ", but the file has only " + std::to_string(vertexEl->count) +
+                                             " vertices (index out of range)");
                     face.push_back(static_cast<uint32_t>(v.i));
                 }
                 if (indices) addFan(mesh, face.data(), face.size());
@@ -320,7 +386,8 @@ void writePly(const Mesh& mesh, const fs::path& path, const PlyWriteOptions& opt
     checkIndices(mesh);
     const bool colours = !options.faceColours.empty();
     std::string out;
-    out.reserve(128 + mesh.positions.size() * (options.binary ? 12 : 36) + mesh.triangles.size() * (options.binary ? 16 : 40));
+    out.reserve(128 + mesh.positions.size() * (options.binary ? 12 : 36) +
+                mesh.triangles.size() * (options.binary ? 16 : 40));
     out += "ply\nformat ";
     out += options.binary ? "binary_little_endian" : "ascii";
     out += " 1.0\ncomment written by cullide\nelement vertex ";
@@ -341,15 +408,24 @@ void writePly(const Mesh& mesh, const fs::path& path, const PlyWriteOptions& opt
         }
     } else {
         for (const Vec3f& p : mesh.positions) {
-            appendFloat(out, p.x()); out += ' ';
-            appendFloat(out, p.y()); out += ' ';
-            appendFloat(out, p.z()); out += '\n';
+            appendFloat(out, p.x());
+            out += ' ';
+            appendFloat(out, p.y());
+            out += ' ';
+            appendFloat(out, p.z());
+            out += '\n';
         }
         for (size_t i = 0; i < mesh.triangles.size(); ++i) {
             out += '3';
-            for (uint32_t v : mesh.triangles[i]) { out += ' '; appendUint(out, v); }
+            for (uint32_t v : mesh.triangles[i]) {
+                out += ' ';
+                appendUint(out, v);
+            }
             if (colours)
-                for (uint8_t c : options.faceColours[i]) { out += ' '; appendUint(out, c); }
+                for (uint8_t c : options.faceColours[i]) {
+                    out += ' ';
+                    appendUint(out, c);
+                }
             out += '\n';
         }
     }

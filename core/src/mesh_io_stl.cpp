@@ -22,7 +22,8 @@ class StlWelder {
 public:
     explicit StlWelder(Mesh& mesh) : mesh_(mesh) {}
     uint32_t add(const Vec3f& p) {
-        const std::array<uint32_t, 3> key{std::bit_cast<uint32_t>(p.x()), std::bit_cast<uint32_t>(p.y()), std::bit_cast<uint32_t>(p.z())};
+        const std::array<uint32_t, 3> key{std::bit_cast<uint32_t>(p.x()), std::bit_cast<uint32_t>(p.y()),
+                                          std::bit_cast<uint32_t>(p.z())};
         auto [it, inserted] = index_.try_emplace(key, static_cast<uint32_t>(mesh_.positions.size()));
         if (inserted) mesh_.positions.push_back(p);
         return it->second;
@@ -34,8 +35,9 @@ private:
 };
 
 bool keywordIs(std::string_view tok, std::string_view kw) {
-    return tok.size() == kw.size() &&
-           std::equal(tok.begin(), tok.end(), kw.begin(), [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == b; });
+    return tok.size() == kw.size() && std::equal(tok.begin(), tok.end(), kw.begin(), [](char a, char b) {
+               return std::tolower(static_cast<unsigned char>(a)) == b;
+           });
 }
 
 Mesh readStlBinary(const std::string& src, std::string_view data, uint32_t facets) {
@@ -53,7 +55,8 @@ Mesh readStlBinary(const std::string& src, std::string_view data, uint32_t facet
                 if constexpr (std::endian::native == std::endian::big) std::reverse(b, b + 4);
                 std::memcpy(&p[c], b, 4);
             }
-            if (!p.allFinite()) throw InputError(src, "facet " + std::to_string(f) + " has a non-finite coordinate (NaN or Inf)");
+            if (!p.allFinite())
+                throw InputError(src, "facet " + std::to_string(f) + " has a non-finite coordinate (NaN or Inf)");
             t[k] = weld.add(p);
         }
         mesh.triangles.push_back(t);
@@ -79,61 +82,67 @@ Mesh readStlAscii(const std::string& src, std::string_view data) {
         if (tok.empty()) continue;
         const std::string_view kw = tok[0];
         switch (state) {
-        case State::Outside:
-            if (!keywordIs(kw, "solid")) fail("parse error: expected 'solid', got " + quote(kw));
-            state = State::Solid;  // the rest of the line is the solid's name
-            break;
-        case State::Solid:
-            if (keywordIs(kw, "endsolid")) {
-                state = State::Outside;
+            case State::Outside:
+                if (!keywordIs(kw, "solid")) fail("parse error: expected 'solid', got " + quote(kw));
+                state = State::Solid;  // the rest of the line is the solid's name
                 break;
-            }
-            if (!keywordIs(kw, "facet") || tok.size() != 5 || !keywordIs(tok[1], "normal"))
-                fail("parse error: expected 'facet normal <x> <y> <z>' or 'endsolid'");
-            for (int c = 0; c < 3; ++c) {
-                float n;  // the normal is not used, but must be a number (NaN/Inf/overflow tolerated)
-                if (parseFloatToken(tok[2 + c], n) == NumStatus::Invalid) fail("parse error: " + quote(tok[2 + c]) + " is not a number");
-            }
-            state = State::Facet;
-            break;
-        case State::Facet:
-            if (tok.size() != 2 || !keywordIs(kw, "outer") || !keywordIs(tok[1], "loop")) fail("parse error: expected 'outer loop'");
-            state = State::Loop;
-            corners = 0;
-            break;
-        case State::Loop:
-            if (keywordIs(kw, "endloop")) {
-                if (tok.size() != 1) fail("parse error: junk after 'endloop'");
-                if (corners != 3)
-                    fail("facet " + std::to_string(facet) + " has " + std::to_string(corners) + " vertices; every facet needs exactly 3");
-                state = State::EndLoop;
-                break;
-            }
-            if (!keywordIs(kw, "vertex") || tok.size() != 4) fail("parse error: expected 'vertex <x> <y> <z>' or 'endloop'");
-            if (corners == 3) fail("facet " + std::to_string(facet) + " has more than 3 vertices; every facet needs exactly 3");
-            {
-                Vec3f p;
-                for (int c = 0; c < 3; ++c) {
-                    const NumStatus st = parseFloatToken(tok[1 + c], p[c]);
-                    if (st == NumStatus::Invalid) fail("parse error: " + quote(tok[1 + c]) + " is not a number");
-                    if (st == NumStatus::OutOfRange || !std::isfinite(p[c]))
-                        fail("facet " + std::to_string(facet) + " has a non-finite coordinate " + quote(tok[1 + c]) + " (NaN, Inf or out of float range)");
+            case State::Solid:
+                if (keywordIs(kw, "endsolid")) {
+                    state = State::Outside;
+                    break;
                 }
-                t[corners++] = weld.add(p);
-            }
-            break;
-        case State::EndLoop:
-            if (!keywordIs(kw, "endfacet") || tok.size() != 1) fail("parse error: expected 'endfacet'");
-            mesh.triangles.push_back(t);
-            ++facet;
-            state = State::Solid;
-            break;
+                if (!keywordIs(kw, "facet") || tok.size() != 5 || !keywordIs(tok[1], "normal"))
+                    fail("parse error: expected 'facet normal <x> <y> <z>' or 'endsolid'");
+                for (int c = 0; c < 3; ++c) {
+                    float n;  // the normal is not used, but must be a number (NaN/Inf/overflow tolerated)
+                    if (parseFloatToken(tok[2 + c], n) == NumStatus::Invalid)
+                        fail("parse error: " + quote(tok[2 + c]) + " is not a number");
+                }
+                state = State::Facet;
+                break;
+            case State::Facet:
+                if (tok.size() != 2 || !keywordIs(kw, "outer") || !keywordIs(tok[1], "loop"))
+                    fail("parse error: expected 'outer loop'");
+                state = State::Loop;
+                corners = 0;
+                break;
+            case State::Loop:
+                if (keywordIs(kw, "endloop")) {
+                    if (tok.size() != 1) fail("parse error: junk after 'endloop'");
+                    if (corners != 3)
+                        fail("facet " + std::to_string(facet) + " has " + std::to_string(corners) +
+                             " vertices; every facet needs exactly 3");
+                    state = State::EndLoop;
+                    break;
+                }
+                if (!keywordIs(kw, "vertex") || tok.size() != 4)
+                    fail("parse error: expected 'vertex <x> <y> <z>' or 'endloop'");
+                if (corners == 3)
+                    fail("facet " + std::to_string(facet) + " has more than 3 vertices; every facet needs exactly 3");
+                {
+                    Vec3f p;
+                    for (int c = 0; c < 3; ++c) {
+                        const NumStatus st = parseFloatToken(tok[1 + c], p[c]);
+                        if (st == NumStatus::Invalid) fail("parse error: " + quote(tok[1 + c]) + " is not a number");
+                        if (st == NumStatus::OutOfRange || !std::isfinite(p[c]))
+                            fail("facet " + std::to_string(facet) + " has a non-finite coordinate " +
+                                 quote(tok[1 + c]) + " (NaN, Inf or out of float range)");
+                    }
+                    t[corners++] = weld.add(p);
+                }
+                break;
+            case State::EndLoop:
+                if (!keywordIs(kw, "endfacet") || tok.size() != 1) fail("parse error: expected 'endfacet'");
+                mesh.triangles.push_back(t);
+                ++facet;
+                state = State::Solid;
+                break;
         }
     }
-    if (state != State::Outside) throw InputError(src, "parse error: the file ends inside a solid (truncated? no 'endsolid')");
+    if (state != State::Outside)
+        throw InputError(src, "parse error: the file ends inside a solid (truncated? no 'endsolid')");
     return mesh;
 }
-
 
 }  // namespace
 
@@ -154,8 +163,10 @@ Mesh readStl(const std::string& src, std::string_view data) {
     size_t i = 0;
     while (i < data.size() && std::isspace(static_cast<unsigned char>(data[i]))) ++i;
     if (!keywordIs(data.substr(i, 5), "solid"))
-        throw InputError(src, "parse error: neither an ascii STL (no 'solid') nor a binary STL (" + std::to_string(data.size()) +
-                                  " bytes is not 84 + 50 x the facet count in its header; truncated?)");
+        throw InputError(src,
+                         "parse error: neither an ascii STL (no 'solid') nor a binary STL (" +
+                             std::to_string(data.size()) +
+                             " bytes is not 84 + 50 x the facet count in its header; truncated?)");
     return readStlAscii(src, data);
 }
 

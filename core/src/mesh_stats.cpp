@@ -77,8 +77,9 @@ MeshStats computeStats(const Mesh& mesh) {
         std::vector<std::pair<Key, uint32_t>> keys(nv);
         for (size_t v = 0; v < nv; ++v) {
             const Vec3f& p = mesh.positions[v];
-            keys[v] = {Key{std::bit_cast<uint32_t>(p.x()), std::bit_cast<uint32_t>(p.y()), std::bit_cast<uint32_t>(p.z())},
-                       static_cast<uint32_t>(v)};
+            keys[v] = {
+                Key{std::bit_cast<uint32_t>(p.x()), std::bit_cast<uint32_t>(p.y()), std::bit_cast<uint32_t>(p.z())},
+                static_cast<uint32_t>(v)};
         }
         std::sort(keys.begin(), keys.end());
         for (size_t i = 1; i < keys.size(); ++i)

@@ -37,7 +37,8 @@ std::pair<int, int> parseResolution(const std::string& text, const std::string& 
         throw InputError(name, "cannot read '" + text + "' (expected N or WxH, e.g. 500 or 640x480)");
     }
     if (w < 1 || h < 1 || w > kMaxViewportSide || h > kMaxViewportSide)
-        throw InputError(name, "'" + text + "': each side must be 1 to " + std::to_string(kMaxViewportSide) + " pixels");
+        throw InputError(name,
+                         "'" + text + "': each side must be 1 to " + std::to_string(kMaxViewportSide) + " pixels");
     return {w, h};
 }
 
@@ -65,8 +66,9 @@ std::vector<Vec3d> parseDirections(const std::string& text, const std::string& n
             std::stringstream nums(item);
             std::string rest;
             if (!(nums >> d.x() >> d.y() >> d.z()) || (nums >> rest))
-                throw InputError(name, "cannot read direction '" + item +
-                                           "' (expected axes, a count, or a list like x,-y,z or '1 0 0;0 1 1')");
+                throw InputError(name,
+                                 "cannot read direction '" + item +
+                                     "' (expected axes, a count, or a list like x,-y,z or '1 0 0;0 1 1')");
         }
         if (!d.allFinite() || d.norm() == 0) throw InputError(name, "direction '" + item + "' is zero or not finite");
         dirs.push_back(d.normalized());
@@ -83,11 +85,13 @@ CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& na
     o.directions = parseDirections(text.directions, names.directions);
     o.hierarchy.kind = named(names.hierarchy, [&] { return parseHierarchyKind(text.hierarchy); });
     if (text.leafSize < 1 || text.leafSize > kMaxLeafSize)
-        throw InputError(names.leafSize, std::to_string(text.leafSize) + ": the leaf size must be 1 to " +
-                                             std::to_string(kMaxLeafSize) + " triangles");
+        throw InputError(names.leafSize,
+                         std::to_string(text.leafSize) + ": the leaf size must be 1 to " +
+                             std::to_string(kMaxLeafSize) + " triangles");
     if (text.branching < kMinBranching || text.branching > kMaxBranching)
-        throw InputError(names.branching, std::to_string(text.branching) + ": the branching must be " +
-                                              std::to_string(kMinBranching) + " to " + std::to_string(kMaxBranching));
+        throw InputError(names.branching,
+                         std::to_string(text.branching) + ": the branching must be " + std::to_string(kMinBranching) +
+                             " to " + std::to_string(kMaxBranching));
     o.hierarchy.leafSize = text.leafSize;
     o.hierarchy.branching = text.branching;
     o.hierarchy.seed = text.seed;

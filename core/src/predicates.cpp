@@ -29,7 +29,9 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 
-Point toPoint(const Vec3d& p) { return Point(p.x(), p.y(), p.z()); }
+Point toPoint(const Vec3d& p) {
+    return Point(p.x(), p.y(), p.z());
+}
 
 constexpr double kO2dErrBound = (3.0 + 16.0 * 0x1p-53) * 0x1p-53;
 
@@ -66,8 +68,8 @@ bool orient3dFromFloats(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Ve
         }
     using I = __int128;
     const I det = I(d[0][0]) * (I(d[1][1]) * d[2][2] - I(d[1][2]) * d[2][1]) +
-                  I(d[0][1]) * (I(d[1][2]) * d[2][0] - I(d[1][0]) * d[2][2]) +
-                  I(d[0][2]) * (I(d[1][0]) * d[2][1] - I(d[1][1]) * d[2][0]);
+        I(d[0][1]) * (I(d[1][2]) * d[2][0] - I(d[1][0]) * d[2][2]) +
+        I(d[0][2]) * (I(d[1][0]) * d[2][1] - I(d[1][1]) * d[2][0]);
     *result = det > 0 ? 1 : det < 0 ? -1 : 0;
     return true;
 }
@@ -86,7 +88,8 @@ int orient2d(const Vec3d& p, const Vec3d& q, const Vec3d& r, int i, int j) {
     if (toIntegers(x, 6, c)) {
         const int64_t a = c[2] - c[0], b = c[3] - c[1], e = c[4] - c[0], f = c[5] - c[1];  // |.| < 2^63
         constexpr int64_t kLimit = int64_t(1) << 62;
-        if (a < kLimit && a > -kLimit && b < kLimit && b > -kLimit && e < kLimit && e > -kLimit && f < kLimit && f > -kLimit) {
+        if (a < kLimit && a > -kLimit && b < kLimit && b > -kLimit && e < kLimit && e > -kLimit && f < kLimit &&
+            f > -kLimit) {
             const __int128 d = __int128(a) * f - __int128(b) * e;  // |.| < 2^125
             return d > 0 ? 1 : d < 0 ? -1 : 0;
         }
@@ -96,7 +99,9 @@ int orient2d(const Vec3d& p, const Vec3d& q, const Vec3d& r, int i, int j) {
     return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0;
 }
 
-int sign(CGAL::Orientation o) { return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0; }
+int sign(CGAL::Orientation o) {
+    return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0;
+}
 
 // A 2D orientation in the projection onto axes (i, j) certainly non-zero (float filter)?
 bool orient2dCertainlyNonZero(const Vec3d& p, const Vec3d& q, const Vec3d& r, int i, int j) {
@@ -123,7 +128,7 @@ int coplanarFrame(const TrianglePoints& t, int* i, int* j) {
 // p on the closed segment [a, b], given that the three are collinear (in projection i, j).
 bool onCollinearSegment(const Vec3d& a, const Vec3d& b, const Vec3d& p, int i, int j) {
     return std::min(a[i], b[i]) <= p[i] && p[i] <= std::max(a[i], b[i]) && std::min(a[j], b[j]) <= p[j] &&
-           p[j] <= std::max(a[j], b[j]);
+        p[j] <= std::max(a[j], b[j]);
 }
 
 // Closed segments [p1, p2] and [p3, p4] meet (2D, projection i, j).
@@ -132,13 +137,13 @@ bool segmentsMeet2d(const Vec3d& p1, const Vec3d& p2, const Vec3d& p3, const Vec
     const int d3 = orient2d(p1, p2, p3, i, j), d4 = orient2d(p1, p2, p4, i, j);
     if (d1 * d2 < 0 && d3 * d4 < 0) return true;
     return (d1 == 0 && onCollinearSegment(p3, p4, p1, i, j)) || (d2 == 0 && onCollinearSegment(p3, p4, p2, i, j)) ||
-           (d3 == 0 && onCollinearSegment(p1, p2, p3, i, j)) || (d4 == 0 && onCollinearSegment(p1, p2, p4, i, j));
+        (d3 == 0 && onCollinearSegment(p1, p2, p3, i, j)) || (d4 == 0 && onCollinearSegment(p1, p2, p4, i, j));
 }
 
 // p in the closed triangle t (2D, projection i, j, t's orientation o there).
 bool inTriangle2d(const TrianglePoints& t, const Vec3d& p, int i, int j, int o) {
     return orient2d(t[0], t[1], p, i, j) * o >= 0 && orient2d(t[1], t[2], p, i, j) * o >= 0 &&
-           orient2d(t[2], t[0], p, i, j) * o >= 0;
+        orient2d(t[2], t[0], p, i, j) * o >= 0;
 }
 
 // The closed segment [s0, s1] meets the closed triangle t, all coplanar: an end inside, or the
@@ -258,15 +263,14 @@ Contact triangleContactFromSigns(const TrianglePoints& a, const TrianglePoints& 
     return Contact::Touching;
 }
 
-
 int orient3d(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s) {
     const double ux = q.x() - p.x(), uy = q.y() - p.y(), uz = q.z() - p.z();
     const double vx = r.x() - p.x(), vy = r.y() - p.y(), vz = r.z() - p.z();
     const double wx = s.x() - p.x(), wy = s.y() - p.y(), wz = s.z() - p.z();
     const double m1 = vy * wz, m2 = vz * wy, m3 = vz * wx, m4 = vx * wz, m5 = vx * wy, m6 = vy * wx;
     const double det = ux * (m1 - m2) + uy * (m3 - m4) + uz * (m5 - m6);
-    const double permanent = (std::abs(m1) + std::abs(m2)) * std::abs(ux) + (std::abs(m3) + std::abs(m4)) * std::abs(uy) +
-                             (std::abs(m5) + std::abs(m6)) * std::abs(uz);
+    const double permanent = (std::abs(m1) + std::abs(m2)) * std::abs(ux) +
+        (std::abs(m3) + std::abs(m4)) * std::abs(uy) + (std::abs(m5) + std::abs(m6)) * std::abs(uz);
     const double bound = kOrient3dErrBound * permanent;
     if (det > bound) return 1;
     if (-det > bound) return -1;
@@ -285,9 +289,11 @@ bool collinear(const Vec3d& p, const Vec3d& q, const Vec3d& r) {
 
 Contact triangleContact(const TrianglePoints& a, const TrianglePoints& b) {
     // Signs of a's corners with respect to b's plane, then of b's with respect to a's.
-    const int da[3] = {orient3d(b[0], b[1], b[2], a[0]), orient3d(b[0], b[1], b[2], a[1]), orient3d(b[0], b[1], b[2], a[2])};
+    const int da[3] = {orient3d(b[0], b[1], b[2], a[0]), orient3d(b[0], b[1], b[2], a[1]),
+                       orient3d(b[0], b[1], b[2], a[2])};
     if (da[0] == da[1] && da[1] == da[2] && da[0] != 0) return Contact::None;
-    const int db[3] = {orient3d(a[0], a[1], a[2], b[0]), orient3d(a[0], a[1], a[2], b[1]), orient3d(a[0], a[1], a[2], b[2])};
+    const int db[3] = {orient3d(a[0], a[1], a[2], b[0]), orient3d(a[0], a[1], a[2], b[1]),
+                       orient3d(a[0], a[1], a[2], b[2])};
     return triangleContactFromSigns(a, b, da, db);
 }
 
@@ -295,7 +301,7 @@ bool triangleSegmentIntersect(const TrianglePoints& t, const Vec3d& s0, const Ve
     const int d0 = orient3d(t[0], t[1], t[2], s0);
     const int d1 = orient3d(t[0], t[1], t[2], s1);
     if (d0 == d1 && d0 != 0) return false;  // both strictly on one side
-    if (d0 == 0 && d1 == 0)                 // in the triangle's plane: CGAL's coplanar test
+    if (d0 == 0 && d1 == 0)  // in the triangle's plane: CGAL's coplanar test
         return coplanarTriangleSegment(t, s0, s1);
     // The segment meets the plane in one point; it lies in the closed triangle iff the line
     // s0 s1 passes on the same (closed) side of the three edges.

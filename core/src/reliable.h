@@ -17,7 +17,9 @@ namespace cullide::detail {
 struct UnitGraph {
     std::vector<uint32_t> start;  // size units + 1
     std::vector<uint32_t> adj;
-    std::span<const uint32_t> neighbours(uint32_t u) const { return {adj.data() + start[u], adj.data() + start[u + 1]}; }
+    std::span<const uint32_t> neighbours(uint32_t u) const {
+        return {adj.data() + start[u], adj.data() + start[u + 1]};
+    }
 };
 
 // `units` are ranges of `triangles` (indices into one shared vertex array, so triangles of

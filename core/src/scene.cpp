@@ -66,7 +66,9 @@ Scene Animation::sceneAt(size_t f) const {
     return s;
 }
 
-static bool finite(const Transform& t) { return t.matrix().allFinite(); }
+static bool finite(const Transform& t) {
+    return t.matrix().allFinite();
+}
 
 void validateAnimation(const Animation& a, const std::string& source) {
     for (size_t i = 0; i < a.scene.objects.size(); ++i) {
@@ -77,8 +79,9 @@ void validateAnimation(const Animation& a, const std::string& source) {
         const Frame& fr = a.frames[f];
         const std::string where = "frame " + std::to_string(f);
         if (!fr.poses.empty() && fr.poses.size() != a.scene.objects.size())
-            throw InputError(source, where + " has " + std::to_string(fr.poses.size()) + " object poses, but the scene has " +
-                                         std::to_string(a.scene.objects.size()) + " objects");
+            throw InputError(source,
+                             where + " has " + std::to_string(fr.poses.size()) + " object poses, but the scene has " +
+                                 std::to_string(a.scene.objects.size()) + " objects");
         for (size_t i = 0; i < fr.poses.size(); ++i) {
             const ObjectPose& p = fr.poses[i];
             const Object& o = a.scene.objects[i];
@@ -86,13 +89,15 @@ void validateAnimation(const Animation& a, const std::string& source) {
                 throw InputError(source, where + ", object '" + o.name + "': non-finite transform");
             if (p.positions) {
                 if (p.positions->size() != o.mesh.positions.size())
-                    throw InputError(source, where + ", object '" + o.name + "': " + std::to_string(p.positions->size()) +
-                                                 " positions, but the mesh has " + std::to_string(o.mesh.positions.size()) +
-                                                 " vertices");
+                    throw InputError(source,
+                                     where + ", object '" + o.name + "': " + std::to_string(p.positions->size()) +
+                                         " positions, but the mesh has " + std::to_string(o.mesh.positions.size()) +
+                                         " vertices");
                 for (size_t v = 0; v < p.positions->size(); ++v)
                     if (!(*p.positions)[v].allFinite())
-                        throw InputError(source, where + ", object '" + o.name + "': vertex " + std::to_string(v) +
-                                                     " is not finite (NaN or Inf)");
+                        throw InputError(source,
+                                         where + ", object '" + o.name + "': vertex " + std::to_string(v) +
+                                             " is not finite (NaN or Inf)");
             }
         }
     }

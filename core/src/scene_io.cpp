@@ -74,13 +74,15 @@ private:
         std::string duplicate;
         auto callback = [&](int, Json::parse_event_t event, Json& parsed) {
             switch (event) {
-            case Json::parse_event_t::object_start: keys.emplace_back(); break;
-            case Json::parse_event_t::object_end: if (!keys.empty()) keys.pop_back(); break;
-            case Json::parse_event_t::key:
-                if (!keys.empty() && !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty())
-                    duplicate = parsed.get<std::string>();
-                break;
-            default: break;
+                case Json::parse_event_t::object_start: keys.emplace_back(); break;
+                case Json::parse_event_t::object_end:
+                    if (!keys.empty()) keys.pop_back();
+                    break;
+                case Json::parse_event_t::key:
+                    if (!keys.empty() && !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty())
+                        duplicate = parsed.get<std::string>();
+                    break;
+                default: break;
             }
             return true;
         };
@@ -96,7 +98,8 @@ private:
             std::string what = e.what();
             const size_t colon = what.find(": ");
             if (colon != std::string::npos) what = what.substr(colon + 2);
-            fail("malformed JSON at line " + std::to_string(line) + ", column " + std::to_string(p - lineStart + 1) + ": " + what);
+            fail("malformed JSON at line " + std::to_string(line) + ", column " + std::to_string(p - lineStart + 1) +
+                 ": " + what);
         } catch (const Json::exception& e) {
             std::string what = e.what();
             const size_t bracket = what.find("] ");
@@ -139,13 +142,17 @@ private:
     double requireNumber(const Json& j, const std::string& where) const {
         if (!j.is_number()) fail(where + ": expected a number, got " + typeName(j));
         const double d = j.get<double>();
-        if (!std::isfinite(d) || !std::isfinite(static_cast<float>(d))) fail(where + ": " + j.dump() + " is not a finite float");
+        if (!std::isfinite(d) || !std::isfinite(static_cast<float>(d)))
+            fail(where + ": " + j.dump() + " is not a finite float");
         return d;
     }
 
     Eigen::Vector3d requireVec3(const Json& j, const std::string& where) const {
-        if (!j.is_array() || j.size() != 3) fail(where + ": expected an array of 3 numbers, got " + typeName(j) + (j.is_array() ? " of size " + std::to_string(j.size()) : ""));
-        return {requireNumber(j[0], where + "[0]"), requireNumber(j[1], where + "[1]"), requireNumber(j[2], where + "[2]")};
+        if (!j.is_array() || j.size() != 3)
+            fail(where + ": expected an array of 3 numbers, got " + typeName(j) +
+                 (j.is_array() ? " of size " + std::to_string(j.size()) : ""));
+        return {requireNumber(j[0], where + "[0]"), requireNumber(j[1], where + "[1]"),
+                requireNumber(j[2], where + "[2]")};
     }
 
     Transform parseTransform(const Json& j, const std::string& where) const {
@@ -225,8 +232,9 @@ private:
                 Mesh m = loadReferencedMesh(ref, pw + ".positions");
                 const size_t expected = scene.objects[it->second].mesh.positions.size();
                 if (m.positions.size() != expected)
-                    fail(pw + ".positions: '" + ref + "' has " + std::to_string(m.positions.size()) + " vertices, but object '" + name +
-                         "' has " + std::to_string(expected) + " (wrong position count)");
+                    fail(pw + ".positions: '" + ref + "' has " + std::to_string(m.positions.size()) +
+                         " vertices, but object '" + name + "' has " + std::to_string(expected) +
+                         " (wrong position count)");
                 p.positions = std::move(m.positions);
             }
         }
@@ -246,7 +254,6 @@ bool isMeshExtension(const fs::path& p) {
         return false;
     }
 }
-
 
 OrderedJson transformJson(const Transform& t) {
     OrderedJson rows = OrderedJson::array();
@@ -281,7 +288,8 @@ Animation loadScene(const fs::path& path) {
     std::string ext = path.extension().string();
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (ext != ".json")
-        throw InputError(path.string(), "unknown scene format '" + ext + "' (expected .json, or a mesh file: .obj .off .ply .stl)");
+        throw InputError(path.string(),
+                         "unknown scene format '" + ext + "' (expected .json, or a mesh file: .obj .off .ply .stl)");
     return SceneParser(path).parse();
 }
 
@@ -290,7 +298,8 @@ void writeScene(const Animation& animation, const fs::path& path) {
     std::set<std::string> names;
     for (const Object& o : animation.scene.objects)
         if (o.name.empty() || !names.insert(o.name).second)
-            throw InputError(path.string(), "cannot write a scene whose object names are empty or not unique ('" + o.name + "')");
+            throw InputError(path.string(),
+                             "cannot write a scene whose object names are empty or not unique ('" + o.name + "')");
     const fs::path dir = path.parent_path();
     const std::string stem = path.stem().string();
     OrderedJson root;

@@ -53,7 +53,8 @@ struct SceneDeleter {
 
 void check(RTCDevice device, const char* what) {
     const RTCError e = rtcGetDeviceError(device);
-    if (e != RTC_ERROR_NONE) throw std::runtime_error(std::string("embree: ") + what + " failed (error " + std::to_string(int(e)) + ")");
+    if (e != RTC_ERROR_NONE)
+        throw std::runtime_error(std::string("embree: ") + what + " failed (error " + std::to_string(int(e)) + ")");
 }
 
 double seconds(std::chrono::steady_clock::time_point t0) {

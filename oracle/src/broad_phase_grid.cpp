@@ -25,12 +25,12 @@ double seconds(std::chrono::steady_clock::time_point t0) {
 
 bool overlap(const Box& a, const Box& b) {
     return a.lo[0] <= b.hi[0] && b.lo[0] <= a.hi[0] && a.lo[1] <= b.hi[1] && b.lo[1] <= a.hi[1] && a.lo[2] <= b.hi[2] &&
-           b.lo[2] <= a.hi[2];
+        b.lo[2] <= a.hi[2];
 }
 
 constexpr uint32_t kMaxCellsPerBox = 64;  // beyond: tested against every box
-constexpr size_t kBatch = 1024;            // candidates handed to the callback at once
-constexpr size_t kChunk = 256;             // a box's partners in a cell tested between flushes
+constexpr size_t kBatch = 1024;  // candidates handed to the callback at once
+constexpr size_t kChunk = 256;  // a box's partners in a cell tested between flushes
 constexpr uint32_t kIndexMask = (uint32_t(1) << 29) - 1;  // entries: cell << 32 | low axes << 29 | box
 
 struct Grid {
@@ -116,7 +116,8 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         objectOf.resize(n);
         for (size_t o = 0; o < objects.size(); ++o) {
             std::copy(objects[o].begin(), objects[o].end(), joined.begin() + std::ptrdiff_t(offset[o]));
-            std::fill(objectOf.begin() + std::ptrdiff_t(offset[o]), objectOf.begin() + std::ptrdiff_t(offset[o + 1]), uint32_t(o));
+            std::fill(objectOf.begin() + std::ptrdiff_t(offset[o]), objectOf.begin() + std::ptrdiff_t(offset[o + 1]),
+                      uint32_t(o));
         }
     }
     const std::span<const Box> boxes = objects.size() > 1 ? std::span<const Box>(joined) : objects[0];
@@ -136,7 +137,8 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         std::array<double, 6> bb{1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
         for (size_t g = blk * kBlock, e = std::min(n, g + kBlock); g < e; ++g) {
             const Box& b = boxes[g];
-            for (int k = 0; k < 3; ++k) bb[k] = std::min(bb[k], double(b.lo[k])), bb[3 + k] = std::max(bb[3 + k], double(b.hi[k]));
+            for (int k = 0; k < 3; ++k)
+                bb[k] = std::min(bb[k], double(b.lo[k])), bb[3 + k] = std::max(bb[3 + k], double(b.hi[k]));
             extent[g] = std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
         }
         blockBounds[blk] = bb;
@@ -254,9 +256,9 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
                     for (size_t j = from; j < to; ++j) {
                         const Entry& eb = packed[j];
                         const bool hit = ((ea.low | eb.low) == 7) & (ea.box.lo[0] <= eb.box.hi[0]) &
-                                         (eb.box.lo[0] <= ea.box.hi[0]) & (ea.box.lo[1] <= eb.box.hi[1]) &
-                                         (eb.box.lo[1] <= ea.box.hi[1]) & (ea.box.lo[2] <= eb.box.hi[2]) &
-                                         (eb.box.lo[2] <= ea.box.hi[2]);
+                            (eb.box.lo[0] <= ea.box.hi[0]) & (ea.box.lo[1] <= eb.box.hi[1]) &
+                            (eb.box.lo[1] <= ea.box.hi[1]) & (ea.box.lo[2] <= eb.box.hi[2]) &
+                            (eb.box.lo[2] <= ea.box.hi[2]);
                         hits[count] = {ea.g, eb.g};
                         count += hit;
                     }

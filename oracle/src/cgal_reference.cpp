@@ -36,9 +36,10 @@ CgalSelfIntersections::CgalSelfIntersections(const Mesh& mesh, const std::string
         const Face f = sm.add_face(SurfaceMesh::Vertex_index(tri[0]), SurfaceMesh::Vertex_index(tri[1]),
                                    SurfaceMesh::Vertex_index(tri[2]));
         if (f == SurfaceMesh::null_face())
-            throw InputError(source, "triangle " + std::to_string(t) +
-                                         " cannot be added to a CGAL Surface_mesh (non-manifold, inconsistently "
-                                         "oriented or repeated indices)");
+            throw InputError(source,
+                             "triangle " + std::to_string(t) +
+                                 " cannot be added to a CGAL Surface_mesh (non-manifold, inconsistently "
+                                 "oriented or repeated indices)");
     }
 }
 
@@ -72,6 +73,8 @@ std::vector<FacePair> selfPairsOf(const Truth& truth, uint32_t object) {
     return out;
 }
 
-const char* cgalVersion() { return CGAL_VERSION_STR; }
+const char* cgalVersion() {
+    return CGAL_VERSION_STR;
+}
 
 }  // namespace cullide::oracle

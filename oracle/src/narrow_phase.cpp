@@ -14,7 +14,9 @@ namespace cullide::oracle {
 namespace detail {
 namespace {
 
-Vec3d corner(const Prim& p, int k) { return Vec3d(p.p[k][0], p.p[k][1], p.p[k][2]); }
+Vec3d corner(const Prim& p, int k) {
+    return Vec3d(p.p[k][0], p.p[k][1], p.p[k][2]);
+}
 
 // Sign of orient3d(a's corners, (x, y, z)) when the float filter is sure of it, else 0. The same
 // arithmetic as orient3d (w = s - p0; det = sum w_k n_k; permanent = sum |w_k| perm_k; the error
@@ -27,7 +29,9 @@ inline int planeSide(const Prim& a, double x, double y, double z) {
     const double bound = kOrient3dErrBound * permanent;
     return det > bound ? 1 : -det > bound ? -1 : 0;
 }
-inline int planeSide(const Prim& a, const Prim& b, int k) { return planeSide(a, b.p[k][0], b.p[k][1], b.p[k][2]); }
+inline int planeSide(const Prim& a, const Prim& b, int k) {
+    return planeSide(a, b.p[k][0], b.p[k][1], b.p[k][2]);
+}
 
 // Sign of orient3d(a's corners, b's corner k) when the filter cannot tell: a's integer normal
 // when b's corner is an integer in a's unit (|N| < 2^61, |w| < 2^63: the dot product fits 126
@@ -114,8 +118,8 @@ Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
         if (exactSide(a, b, 3 - sb[0] - sb[1]) != 0) return Contact::None;
         const Vec3d e0 = corner(a, sa[0]), e1 = corner(a, sa[1]);
         return coplanarOrientation(e0, e1, corner(a, 3 - sa[0] - sa[1]), corner(b, 3 - sb[0] - sb[1])) > 0
-                   ? Contact::Touching
-                   : Contact::None;
+            ? Contact::Touching
+            : Contact::None;
     } else if (shared == 1) {
         // b's opposite edge strictly on one side of a's plane: b meets a's plane only at the
         // shared vertex, which is on neither opposite edge: no contact elsewhere (and the same
@@ -133,8 +137,8 @@ Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
         // lies in the other triangle), decided with a few exact 2D orientations.
         if (s1 == 0 && s2 == 0)
             return coplanarWedgesMeet(corner(a, sa[0]), corner(a, a1), corner(a, a2), corner(b, b1), corner(b, b2))
-                       ? Contact::Touching
-                       : Contact::None;
+                ? Contact::Touching
+                : Contact::None;
         // Not coplanar: b meets a's plane in a segment [v, p], p on b's opposite edge, and a
         // meets b's plane in [v, q], q on a's; both lie on the planes' common line, so the
         // triangles meet beyond v (CGAL's rule: the nearer of p and q is on the other triangle)

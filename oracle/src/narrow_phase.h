@@ -16,14 +16,14 @@
 namespace cullide::oracle::detail {
 
 struct alignas(64) Prim {
-    double n[3];     // (p1 - p0) x (p2 - p0), evaluated as orient3d's filter does
+    double n[3];  // (p1 - p0) x (p2 - p0), evaluated as orient3d's filter does
     double perm[3];  // |products| of each component of n, summed (the permanent's factors)
-    int64_t ni[3];   // the same cross product exactly, in integers of 2^unit (when unit is set)
-    float p[3][3];   // world corners (float; exact in double)
-    Triangle v;      // vertex ids for the sharing rules (welded when asked)
+    int64_t ni[3];  // the same cross product exactly, in integers of 2^unit (when unit is set)
+    float p[3][3];  // world corners (float; exact in double)
+    Triangle v;  // vertex ids for the sharing rules (welded when asked)
     uint32_t triangle;  // index in the object's mesh
-    int32_t unit;    // the corners' coordinates are integers times 2^unit below 2^62 (the lowest
-                     // set bit among them), the edges below 2^30 of it; kNoUnit otherwise
+    int32_t unit;  // the corners' coordinates are integers times 2^unit below 2^62 (the lowest
+                   // set bit among them), the edges below 2^30 of it; kNoUnit otherwise
 };
 static_assert(sizeof(Prim) == 128);
 

@@ -28,7 +28,9 @@ using detail::Box;
 using detail::Candidate;
 using Clock = std::chrono::steady_clock;
 
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 // Coordinates beyond this are refused: Embree drops boxes beyond ~1.8e18, and the float filter's
 // products stay far from overflow.
@@ -54,7 +56,7 @@ struct Buffer {
 
 struct ObjectData {
     Buffer<Prim> prims;  // Embree primitive order = ascending triangle index
-    Buffer<Box> boxes;   // one per primitive
+    Buffer<Box> boxes;  // one per primitive
 };
 
 struct Local {
@@ -67,7 +69,9 @@ struct Context {
     tbb::enumerable_thread_specific<Local> locals;
 };
 
-PairClass toClass(Contact c) { return c == Contact::Crossing ? PairClass::Crossing : PairClass::Touching; }
+PairClass toClass(Contact c) {
+    return c == Contact::Crossing ? PairClass::Crossing : PairClass::Touching;
+}
 
 // The narrow phase, called concurrently by the broad phase with batches of candidates.
 void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
@@ -85,8 +89,7 @@ void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
         if (contact == Contact::None) continue;
         if (c.object0 == c.object1 && a.triangle > b.triangle)
             local.pairs.push_back({c.object0, b.triangle, c.object1, a.triangle, toClass(contact)});
-        else
-            local.pairs.push_back({c.object0, a.triangle, c.object1, b.triangle, toClass(contact)});
+        else local.pairs.push_back({c.object0, a.triangle, c.object1, b.triangle, toClass(contact)});
     }
 }
 
@@ -105,7 +108,8 @@ std::vector<uint32_t> weldMap(std::span<const Vec3f> positions) {
     });
     std::vector<uint32_t> map(positions.size());
     for (size_t k = 0; k < order.size(); ++k)
-        map[order[k]] = (k > 0 && bits(positions[order[k]]) == bits(positions[order[k - 1]])) ? map[order[k - 1]] : order[k];
+        map[order[k]] =
+            (k > 0 && bits(positions[order[k]]) == bits(positions[order[k - 1]])) ? map[order[k - 1]] : order[k];
     return map;
 }
 
@@ -137,7 +141,8 @@ void spatialOrder(std::span<const Vec3f> positions, std::span<const Triangle> tr
             uint64_t code = 0;
             for (int k = 0; k < 3; ++k) {
                 const float extent = b[3 + k] - b[k];
-                const uint64_t q = extent > 0 ? std::min<uint64_t>(1023, uint64_t(double(p[k] - b[k]) / extent * 1024)) : 0;
+                const uint64_t q =
+                    extent > 0 ? std::min<uint64_t>(1023, uint64_t(double(p[k] - b[k]) / extent * 1024)) : 0;
                 for (int bit = 0; bit < 10; ++bit) code |= ((q >> bit) & 1) << (3 * bit + k);
             }
             keys[i] = code << 32 | kept[i];
@@ -148,8 +153,12 @@ void spatialOrder(std::span<const Vec3f> positions, std::span<const Triangle> tr
     for (size_t i = 0; i < n; ++i) kept[i] = uint32_t(sorted[i]);
 }
 
-float roundDown(float x) { return std::nextafter(x, -std::numeric_limits<float>::infinity()); }
-float roundUp(float x) { return std::nextafter(x, std::numeric_limits<float>::infinity()); }
+float roundDown(float x) {
+    return std::nextafter(x, -std::numeric_limits<float>::infinity());
+}
+float roundUp(float x) {
+    return std::nextafter(x, std::numeric_limits<float>::infinity());
+}
 
 // `subset`: per object, which triangles take part (null: all).
 Truth run(const Scene& scene, const OracleOptions& options, const std::vector<std::vector<char>>* subset) {
@@ -166,21 +175,25 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
         // World positions (Scene::worldMesh's arithmetic, without copying the triangles).
         Buffer<Vec3f> world(nv);
         parallelFor(0, nv, 4096, [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t v = r.begin(); v != r.end(); ++v) world[v] = applyTransform(object.transform, object.mesh.positions[v]);
+            for (size_t v = r.begin(); v != r.end(); ++v)
+                world[v] = applyTransform(object.transform, object.mesh.positions[v]);
         });
         const std::span<const Vec3f> positions = world;
         for (size_t v = 0; v < nv; ++v)
             for (int k = 0; k < 3; ++k) {
                 const float x = positions[v][k];
                 if (!std::isfinite(x))
-                    throw InputError("scene", name + ": vertex " + std::to_string(v) + " has a non-finite world coordinate");
+                    throw InputError("scene",
+                                     name + ": vertex " + std::to_string(v) + " has a non-finite world coordinate");
                 if (std::abs(double(x)) > kMaxCoordinate)
-                    throw InputError("scene", name + ": vertex " + std::to_string(v) +
-                                                  " has a world coordinate beyond 2^60, which the oracle cannot decide on");
+                    throw InputError("scene",
+                                     name + ": vertex " + std::to_string(v) +
+                                         " has a world coordinate beyond 2^60, which the oracle cannot decide on");
             }
         for (size_t t = 0; t < n; ++t)
             if (triangles[t][0] >= nv || triangles[t][1] >= nv || triangles[t][2] >= nv)
-                throw InputError("scene", name + ": triangle " + std::to_string(t) + " has a vertex index out of range");
+                throw InputError("scene",
+                                 name + ": triangle " + std::to_string(t) + " has a vertex index out of range");
 
         ObjectData& d = ctx.objects[o];
         std::vector<uint32_t> vertexId;  // the vertex each index stands for in the sharing rules
@@ -192,8 +205,8 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                 if (subset && !(*subset)[o][t]) continue;
                 const Triangle& tri = triangles[t];  // the file's indices: a repeat is degenerate
                 degen[t] = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] ||
-                           collinear(positions[tri[0]].cast<double>(), positions[tri[1]].cast<double>(),
-                                     positions[tri[2]].cast<double>());
+                    collinear(positions[tri[0]].cast<double>(), positions[tri[1]].cast<double>(),
+                              positions[tri[2]].cast<double>());
             }
         });
         std::vector<uint32_t> kept;  // the primitives' triangles
@@ -230,15 +243,16 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
         truth.trianglesTested += d.prims.size();
     }
     if (truth.trianglesTested > (size_t(1) << 29))
-        throw InputError("scene", std::to_string(truth.trianglesTested) +
-                                      " triangles to test: the oracle's broad phase takes at most 2^29 (536,870,912)");
+        throw InputError("scene",
+                         std::to_string(truth.trianglesTested) +
+                             " triangles to test: the oracle's broad phase takes at most 2^29 (536,870,912)");
     truth.setupSeconds = since(t0);
 
     std::vector<std::span<const Box>> boxes(ctx.objects.size());
     for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = ctx.objects[o].boxes;
     const detail::BroadPhaseTimes bt = options.broadPhase == BroadPhase::Embree
-                                           ? detail::collideAll(boxes, narrowPhase, &ctx)
-                                           : detail::collideGrid(boxes, narrowPhase, &ctx);
+        ? detail::collideAll(boxes, narrowPhase, &ctx)
+        : detail::collideGrid(boxes, narrowPhase, &ctx);
     truth.buildSeconds = bt.buildSeconds;
     truth.collideSeconds = bt.collideSeconds;
 
@@ -255,13 +269,17 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
 
 }  // namespace
 
-const char* toString(PairClass c) { return c == PairClass::Crossing ? "crossing" : "touching"; }
+const char* toString(PairClass c) {
+    return c == PairClass::Crossing ? "crossing" : "touching";
+}
 
 size_t Truth::count(PairClass c) const {
     return size_t(std::count_if(pairs.begin(), pairs.end(), [c](const IntersectingPair& p) { return p.cls == c; }));
 }
 
-const char* toString(BroadPhase b) { return b == BroadPhase::Embree ? "embree" : "grid"; }
+const char* toString(BroadPhase b) {
+    return b == BroadPhase::Embree ? "embree" : "grid";
+}
 
 BroadPhase parseBroadPhase(const std::string& text) {
     if (text == "grid") return BroadPhase::Grid;
@@ -269,15 +287,18 @@ BroadPhase parseBroadPhase(const std::string& text) {
     throw InputError("option --broad-phase", "unknown broad phase '" + text + "' (expected grid or embree)");
 }
 
-Truth findIntersections(const Scene& scene, const OracleOptions& options) { return run(scene, options, nullptr); }
+Truth findIntersections(const Scene& scene, const OracleOptions& options) {
+    return run(scene, options, nullptr);
+}
 
 Truth exactStage(const Scene& scene, std::span<const TriangleRef> pcs, const OracleOptions& options) {
     std::vector<std::vector<char>> subset(scene.objects.size());
     for (size_t o = 0; o < scene.objects.size(); ++o) subset[o].assign(scene.objects[o].mesh.triangleCount(), 0);
     for (const TriangleRef& p : pcs) {
         if (p.object >= scene.objects.size() || p.triangle >= subset[p.object].size())
-            throw InputError("pcs", "entry (" + std::to_string(p.object) + ", " + std::to_string(p.triangle) +
-                                        ") names no triangle of the scene");
+            throw InputError("pcs",
+                             "entry (" + std::to_string(p.object) + ", " + std::to_string(p.triangle) +
+                                 ") names no triangle of the scene");
         subset[p.object][p.triangle] = 1;
     }
     return run(scene, options, &subset);

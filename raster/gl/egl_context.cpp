@@ -51,8 +51,9 @@ EGLContext createCoreContext(EGLDisplay display, std::string& why) {
             return EGL_NO_CONTEXT;
         }
     }
-    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
-                                 EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+    const EGLint attributes[] = {
+        EGL_CONTEXT_MAJOR_VERSION,           4,       EGL_CONTEXT_MINOR_VERSION, 5, EGL_CONTEXT_OPENGL_PROFILE_MASK,
+        EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
     EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, attributes);
     if (context == EGL_NO_CONTEXT) why = "no OpenGL 4.5 core context (" + eglErrorName(eglGetError()) + ")";
     return context;
@@ -106,10 +107,8 @@ EglContext::EglContext(const GlBackendOptions& options) {
     if (wantSurfaceless) {
         if (epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_MESA_platform_surfaceless")) {
             EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-            if (d == EGL_NO_DISPLAY)
-                note("Mesa surfaceless: no display (" + eglErrorName(eglGetError()) + ")");
-            else
-                surfaceless.push_back({d, "Mesa surfaceless"});
+            if (d == EGL_NO_DISPLAY) note("Mesa surfaceless: no display (" + eglErrorName(eglGetError()) + ")");
+            else surfaceless.push_back({d, "Mesa surfaceless"});
         } else {
             note("Mesa surfaceless: the EGL library has no EGL_MESA_platform_surfaceless");
         }

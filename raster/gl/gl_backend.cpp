@@ -49,7 +49,9 @@ const char* kFragmentShader = R"(#version 450 core
 void main() {}
 )";
 
-GLenum toGl(DepthFunc f) { return GLenum(GL_NEVER + int(f)); }
+GLenum toGl(DepthFunc f) {
+    return GLenum(GL_NEVER + int(f));
+}
 
 std::string glString(GLenum name) {
     const GLubyte* s = glGetString(name);
@@ -66,7 +68,8 @@ GLuint compile(GLenum type, const char* source) {
         char log[2048] = {};
         glGetShaderInfoLog(shader, sizeof log, nullptr, log);
         glDeleteShader(shader);
-        throw BackendUnavailable(std::string("the GL cannot compile the vertex shader (double precision needed): ") + log);
+        throw BackendUnavailable(std::string("the GL cannot compile the vertex shader (double precision needed): ") +
+                                 log);
     }
     return shader;
 }
@@ -113,8 +116,7 @@ public:
             info_.hasUnorm32 = makeDepthTarget(GL_DEPTH_COMPONENT32, 4, 4, fbo, rbo);
             if (fbo) glDeleteFramebuffers(1, &fbo);
             if (rbo) glDeleteRenderbuffers(1, &rbo);
-            while (glGetError() != GL_NO_ERROR) {
-            }
+            while (glGetError() != GL_NO_ERROR) {}
         }
 
         const GLuint vs = compile(GL_VERTEX_SHADER, kVertexShader), fs = compile(GL_FRAGMENT_SHADER, kFragmentShader);
@@ -185,7 +187,7 @@ public:
 
     std::string describe() const override {
         std::string s = "gl: " + info_.renderer + ", " + info_.version + ", " + info_.platform + ", " +
-                        std::to_string(info_.subpixelBits) + " subpixel bits";
+            std::to_string(info_.subpixelBits) + " subpixel bits";
         if (depthBits_ > 0) s += ", " + format_.name() + " (" + std::to_string(depthBits_) + " depth bits)";
         return s;
     }
@@ -208,18 +210,16 @@ public:
         const DepthFormat format = effectiveFormat(view.depth);
         if (!(format == view.depth) && warned_.insert(view.depth.name()).second) {
             const std::string msg = "gl backend: depth " + view.depth.name() + " is not available; using " +
-                                    format.name() + " (the nearest GL depth format)";
-            if (options_.warn)
-                options_.warn(msg);
-            else
-                std::fprintf(stderr, "cullide: warning: %s\n", msg.c_str());
+                format.name() + " (the nearest GL depth format)";
+            if (options_.warn) options_.warn(msg);
+            else std::fprintf(stderr, "cullide: warning: %s\n", msg.c_str());
         }
         if (!fbo_ || view.width != width_ || view.height != height_ || !(format == format_)) {
             if (fbo_) glDeleteFramebuffers(1, &fbo_);
             if (rbo_) glDeleteRenderbuffers(1, &rbo_);
             const GLenum internal = format.kind == DepthFormat::Kind::Float32 ? GL_DEPTH_COMPONENT32F
-                                    : format.bits == 16                       ? GL_DEPTH_COMPONENT16
-                                    : format.bits == 24                       ? GL_DEPTH_COMPONENT24
+                : format.bits == 16                                           ? GL_DEPTH_COMPONENT16
+                : format.bits == 24                                           ? GL_DEPTH_COMPONENT24
                                                                               : GL_DEPTH_COMPONENT32;
             if (!makeDepthTarget(internal, view.width, view.height, fbo_, rbo_))
                 throw BackendUnavailable("cannot make a " + std::to_string(view.width) + "x" +
@@ -259,7 +259,8 @@ public:
         glProgramUniform3d(program_, uniforms_[1], view.up.x(), view.up.y(), view.up.z());
         glProgramUniform3d(program_, uniforms_[2], view.dir.x(), view.dir.y(), view.dir.z());
         glProgramUniform3d(program_, uniforms_[3], view.xmin, view.ymin, view.znear);
-        glProgramUniform3d(program_, uniforms_[4], view.xmax - view.xmin, view.ymax - view.ymin, view.zfar - view.znear);
+        glProgramUniform3d(program_, uniforms_[4], view.xmax - view.xmin, view.ymax - view.ymin,
+                           view.zfar - view.znear);
         glProgramUniform2d(program_, uniforms_[5], double(view.width), double(view.height));
         haveView_ = true;
         checkError("setView");
@@ -269,13 +270,15 @@ public:
         if (!haveView_) throw InputError("command list", "execute() before setView()");
         if (list.queryOpen()) throw InputError("command list", "a query is still open at the end of the list");
         if (list.conservativeCount() > 0)
-            throw InputError("command list", "conservative commands need conservative rasterization, which this GL "
-                                             "backend does not provide (the reliable method is CPU-only)");
+            throw InputError("command list",
+                             "conservative commands need conservative rasterization, which this GL "
+                             "backend does not provide (the reliable method is CPU-only)");
         for (const Command& c : list.commands())
             if (c.op == Command::Op::Draw && uint64_t(c.first) + c.count > triangleCount_)
-                throw InputError("command list", "draw of triangles [" + std::to_string(c.first) + ", " +
-                                                     std::to_string(uint64_t(c.first) + c.count) + ") but the geometry has " +
-                                                     std::to_string(triangleCount_) + " triangles");
+                throw InputError("command list",
+                                 "draw of triangles [" + std::to_string(c.first) + ", " +
+                                     std::to_string(uint64_t(c.first) + c.count) + ") but the geometry has " +
+                                     std::to_string(triangleCount_) + " triangles");
         context_.makeCurrent();
         glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
         glUseProgram(program_);
@@ -332,7 +335,8 @@ public:
                 queryBufferBytes_ = bytes;
             }
             for (uint32_t q = 0; q < n; ++q)
-                glGetQueryBufferObjectui64v(ids[q], queryBuffer_, GL_QUERY_RESULT, GLintptr(q) * GLintptr(sizeof(uint64_t)));
+                glGetQueryBufferObjectui64v(ids[q], queryBuffer_, GL_QUERY_RESULT,
+                                            GLintptr(q) * GLintptr(sizeof(uint64_t)));
             glGetNamedBufferSubData(queryBuffer_, 0, bytes, results.data());
         }
         checkError("execute");
@@ -350,7 +354,8 @@ public:
         glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
         glPixelStorei(GL_PACK_ALIGNMENT, 4);
         const bool isFloat = format_.kind == DepthFormat::Kind::Float32;
-        glReadPixels(0, 0, width_, height_, GL_DEPTH_COMPONENT, isFloat ? GL_FLOAT : GL_UNSIGNED_INT, img.values.data());
+        glReadPixels(0, 0, width_, height_, GL_DEPTH_COMPONENT, isFloat ? GL_FLOAT : GL_UNSIGNED_INT,
+                     img.values.data());
         glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
         if (!isFloat && format_.bits < 32) {
             // GL returns k scaled to 32 bits, v = k * (2^32 - 1) / (2^n - 1); back to k, exactly.

@@ -22,12 +22,13 @@ bool isBackendName(const std::string& name) {
 std::string backendNameList() {
     std::string out;
     const std::vector<std::string>& names = backendNames();
-    for (size_t i = 0; i < names.size(); ++i)
-        out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+    for (size_t i = 0; i < names.size(); ++i) out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
     return out;
 }
 
-bool glBuilt() { return CULLIDE_GL; }
+bool glBuilt() {
+    return CULLIDE_GL;
+}
 
 std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads) {
     if (name == "cpu") {
@@ -41,7 +42,9 @@ std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads) 
 
 #if !CULLIDE_GL
 // Built without raster/gl/ (-DCULLIDE_GL=OFF): the GL backend's entry points say so.
-std::unique_ptr<GlBackend> makeGlBackend(const GlBackendOptions&) { throw BackendUnavailable(kGlNotBuilt); }
+std::unique_ptr<GlBackend> makeGlBackend(const GlBackendOptions&) {
+    throw BackendUnavailable(kGlNotBuilt);
+}
 
 bool glBackendAvailable(std::string* why, const GlBackendOptions&) {
     if (why) *why = kGlNotBuilt;

@@ -63,8 +63,8 @@ void makeEvents(const CommandList& list, const DepthFormat& format, const TileGr
                 tx1 = std::max<int>(tx1, t.tx1);
                 ty1 = std::max<int>(ty1, t.ty1);
             }
-            e.tiles = tx1 < 0 ? TileRect{1, 1, 0, 0}
-                              : TileRect{uint16_t(tx0), uint16_t(ty0), uint16_t(tx1), uint16_t(ty1)};
+            e.tiles =
+                tx1 < 0 ? TileRect{1, 1, 0, 0} : TileRect{uint16_t(tx0), uint16_t(ty0), uint16_t(tx1), uint16_t(ty1)};
             // Conservative setup only rejects: nothing is clipped, zero area is drawn.
             std::array<uint32_t, 3>& s = out.stats[k];
             for (uint32_t t = e.first; t < e.first + e.count; ++t) {
@@ -85,7 +85,7 @@ void makeEvents(const CommandList& list, const DepthFormat& format, const TileGr
 namespace {
 
 constexpr uint32_t kExactTilesUpTo = 4096;  // draws up to this many records: binned to their exact tiles
-constexpr size_t kEventBlock = 256;         // events per task when finding their tiles
+constexpr size_t kEventBlock = 256;  // events per task when finding their tiles
 
 // Calls visit(tile) once for each tile event `e` (number k) touches. `stamp` is the task's
 // per-tile scratch (the last event that visited each tile).
@@ -115,7 +115,7 @@ void eachTile(const Event& e, const TileGrid& grid, const RecordIndex& plain, co
 bool sameAsPrevious(const std::vector<Event>& events, size_t k) {
     const Event &e = events[k], &f = events[k - 1];
     return !e.clears() && !f.clears() && e.conservative == f.conservative && e.recBegin == f.recBegin &&
-           e.recEnd == f.recEnd;
+        e.recEnd == f.recEnd;
 }
 
 }  // namespace

@@ -123,14 +123,14 @@ inline size_t gallopLowerBound(const uint32_t* v, size_t n, size_t hint, uint32_
 // A clear or a draw with the GL state it runs under.
 struct Event {
     bool clear = false;
-    bool intervalClear = false;                              // ClearIntervals
+    bool intervalClear = false;  // ClearIntervals
     bool conservative = false, test = false, write = false;  // DrawConservative
     DepthFunc func = DepthFunc::Less;
     bool mask = true;
     int32_t query = -1;
     uint32_t clearValue = 0;
     uint32_t recBegin = 0, recEnd = 0;  // draw: record range
-    uint32_t first = 0, count = 0;      // draw: triangle range
+    uint32_t first = 0, count = 0;  // draw: triangle range
     TileRect tiles{1, 1, 0, 0};
     bool clears() const { return clear || intervalClear; }
 };
@@ -148,10 +148,10 @@ struct EventList {
     std::vector<Event> events;
     TileBins bins;  // per tile: the events that touch it, in command order
     std::vector<std::array<uint32_t, 3>> stats;  // per event: rejected, clipped, zero-area triangles
-    std::vector<size_t> tileStart;               // per event, its run in tiles
-    std::vector<uint32_t> tiles;                 // the tiles each event's records touch
+    std::vector<size_t> tileStart;  // per event, its run in tiles
+    std::vector<uint32_t> tiles;  // the tiles each event's records touch
     std::vector<std::vector<uint32_t>> blockTiles;  // tiles per block of events, before concatenation
-    std::vector<uint32_t> counts;                   // binning scratch
+    std::vector<uint32_t> counts;  // binning scratch
 };
 
 // Step 5a: the clears and draws of `list` as events, with the state that `walk` follows; each

@@ -31,7 +31,9 @@ namespace {
 
 constexpr double kU = 0x1p-53;
 
-int64_t floorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+int64_t floorDiv(int64_t a, int64_t b) {
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
 
 }  // namespace
 
@@ -148,7 +150,7 @@ bool setupConservative(const WinVertex& v0, const WinVertex& v1, const WinVertex
                 const double mdx = std::max(std::abs(out.x0 + 0.5 - v0.x), std::abs(out.x1 + 0.5 - v0.x)) + 1;
                 const double mdy = std::max(std::abs(out.y0 + 0.5 - v0.y), std::abs(out.y1 + 0.5 - v0.y)) + 1;
                 out.eps = gerrX * mdx + gerrY * mdy +
-                          16 * kU * (std::abs(v0.z) + std::abs(gx) * mdx + std::abs(gy) * mdy + out.spread);
+                    16 * kU * (std::abs(v0.z) + std::abs(gx) * mdx + std::abs(gy) * mdy + out.spread);
             }
         }
     }

@@ -40,14 +40,14 @@ struct ConsTri {
     int32_t x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // candidate pixels (inclusive), clipped to the viewport
     // Depth: interval at pixel (i, j) = [max(zmin, c - spread) - eps, min(zmax, c + spread) + eps]
     // with c the plane at the pixel centre (usePlane); else the depth range of the triangle clipped
-// (in double) to the dilated pixel's prism, widened by its rounding and clamped to [zmin, zmax]
-// (Box: [zmin, zmax]); then widened by zeta.
+    // (in double) to the dilated pixel's prism, widened by its rounding and clamped to [zmin, zmax]
+    // (Box: [zmin, zmax]); then widened by zeta.
     bool usePlane = false;
     DepthPlane plane;
     double spread = 0, eps = 0, zmin = 0, zmax = 0;
     double zeta = 0;  // e_z: toWindow's depth error, added at both ends
-    WinVertex v[3];   // the unsnapped vertices: without a usable plane (edge-on or nearly), the
-                      // interval is the depth range of the triangle clipped to the dilated pixel
+    WinVertex v[3];  // the unsnapped vertices: without a usable plane (edge-on or nearly), the
+                     // interval is the depth range of the triangle clipped to the dilated pixel
 };
 
 // Sets up one triangle. Returns false when it cannot cover any pixel (its double bounding box is

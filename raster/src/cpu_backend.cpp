@@ -45,7 +45,9 @@
 
 namespace cullide::raster {
 
-const char* toString(FillRule rule) { return rule == FillRule::BottomLeft ? "bottom-left" : "top-left"; }
+const char* toString(FillRule rule) {
+    return rule == FillRule::BottomLeft ? "bottom-left" : "top-left";
+}
 
 namespace {
 
@@ -69,10 +71,10 @@ public:
     std::string describe() const override {
         std::string s = options_.scalarReference ? "cpu scalar reference" : "cpu reference";
         s += " (" + std::to_string(options_.subpixelBits) + " subpixel bits, " + toString(options_.fillRule) +
-             " fill rule";
+            " fill rule";
         if (!options_.scalarReference)
             s += ", " + std::to_string(options_.tileSize) + " px tiles, " +
-                 (options_.threads > 0 ? std::to_string(options_.threads) : std::string("default")) + " threads";
+                (options_.threads > 0 ? std::to_string(options_.threads) : std::string("default")) + " threads";
         return s + ")";
     }
 
@@ -94,8 +96,9 @@ public:
         for (size_t t = 0; t < triangles.size(); ++t)
             for (uint32_t v : triangles[t])
                 if (v >= n)
-                    throw InputError("geometry", "triangle " + std::to_string(t) + " refers to vertex " +
-                                                     std::to_string(v) + " of " + std::to_string(n));
+                    throw InputError("geometry",
+                                     "triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) +
+                                         " of " + std::to_string(n));
         if (triangles.size() >= size_t(UINT32_MAX))
             throw InputError("geometry", "too many triangles for 32-bit indices");
         positions_.assign(positions.begin(), positions.end());
@@ -105,8 +108,8 @@ public:
 
     void setView(const OrthoView& view) override {
         view.validate();
-        const bool resize = !haveView_ || view.width != view_.width || view.height != view_.height ||
-                            !(view.depth == view_.depth);
+        const bool resize =
+            !haveView_ || view.width != view_.width || view.height != view_.height || !(view.depth == view_.depth);
         view_ = view;
         haveView_ = true;
         windowValid_ = false;
@@ -131,10 +134,10 @@ public:
         for (const Command& c : list.commands())
             if ((c.op == Command::Op::Draw || c.op == Command::Op::DrawConservative) &&
                 uint64_t(c.first) + c.count > triangles_.size())
-                throw InputError("command list", "draw range [" + std::to_string(c.first) + ", " +
-                                                     std::to_string(uint64_t(c.first) + c.count) +
-                                                     ") exceeds the geometry's " + std::to_string(triangles_.size()) +
-                                                     " triangles");
+                throw InputError("command list",
+                                 "draw range [" + std::to_string(c.first) + ", " +
+                                     std::to_string(uint64_t(c.first) + c.count) + ") exceeds the geometry's " +
+                                     std::to_string(triangles_.size()) + " triangles");
         stats_ = RasterStats{};
         std::vector<uint64_t> results;
         inArena([&] {
@@ -147,8 +150,7 @@ public:
             if (options_.scalarReference)
                 results = detail::executeReference(list, window_, triangles_, params_, view_.depth, state_, depth_,
                                                    stats_, {&ilo_, &ihi_, consErr_});
-            else
-                results = executeFast(list);
+            else results = executeFast(list);
         });
         return results;
     }
@@ -197,7 +199,6 @@ private:
         windowValid_ = true;
     }
 
-
     // Steps 3-7 (step 1 is execute's, step 2 updateWindow's).
     std::vector<uint64_t> executeFast(const CommandList& list) {
         detail::StateWalker walk(state_, list.queryCount());
@@ -225,9 +226,8 @@ private:
     void runTiles() {
         const bool isFloat = view_.depth.kind == DepthFormat::Kind::Float32;
         const detail::RasterTable table = detail::pickRasterTable(isFloat, options_.simd);
-        const detail::TileJob job{events_,      plain_,       conservative_, table,       view_.depth,
-                                  view_.width,  view_.height, grid_,         depth_.data(), ilo_.data(),
-                                  ihi_.data()};
+        const detail::TileJob job{events_,      plain_, conservative_, table,       view_.depth, view_.width,
+                                  view_.height, grid_,  depth_.data(), ilo_.data(), ihi_.data()};
         parallelFor(0, grid_.count(), 1, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t tile = r.begin(); tile != r.end(); ++tile)
                 detail::runTile(job, tile, frags_.local(), tileOut_[tile]);
@@ -284,13 +284,15 @@ private:
 
 std::unique_ptr<CpuBackend> makeCpuBackend(const CpuBackendOptions& options) {
     if (options.subpixelBits < kMinSubpixelBits || options.subpixelBits > kMaxSubpixelBits)
-        throw InputError("cpu backend options", "subpixel bits must be " + std::to_string(kMinSubpixelBits) + ".." +
-                                                    std::to_string(kMaxSubpixelBits) + ", got " +
-                                                    std::to_string(options.subpixelBits));
+        throw InputError("cpu backend options",
+                         "subpixel bits must be " + std::to_string(kMinSubpixelBits) + ".." +
+                             std::to_string(kMaxSubpixelBits) + ", got " + std::to_string(options.subpixelBits));
     if (options.threads < 0 || options.threads > 1024)
-        throw InputError("cpu backend options", "threads must be 0 (default) to 1024, got " + std::to_string(options.threads));
+        throw InputError("cpu backend options",
+                         "threads must be 0 (default) to 1024, got " + std::to_string(options.threads));
     if (options.tileSize < 8 || options.tileSize > 1024)
-        throw InputError("cpu backend options", "tile size must be 8..1024 pixels, got " + std::to_string(options.tileSize));
+        throw InputError("cpu backend options",
+                         "tile size must be 8..1024 pixels, got " + std::to_string(options.tileSize));
     if (options.fillRule != FillRule::BottomLeft && options.fillRule != FillRule::TopLeft)
         throw InputError("cpu backend options", "unknown fill rule");
     return std::make_unique<CpuBackendImpl>(options);

@@ -20,7 +20,7 @@ namespace cullide::raster::detail {
 struct FragGroup {
     uint32_t pixel;  // depth-buffer index of lane 0 (viewports have at most kMaxViewportSide^2 = 2^28 pixels)
     uint32_t lanes;  // bit l set: pixel + l is a fragment
-    uint32_t z[4];   // incoming depth codes, per lane
+    uint32_t z[4];  // incoming depth codes, per lane
 };
 static_assert(uint64_t(kMaxViewportSide) * uint64_t(kMaxViewportSide) <= uint64_t(UINT32_MAX),
               "FragGroup::pixel holds a depth-buffer index");
@@ -31,7 +31,7 @@ inline constexpr size_t kFragCap = size_t(1) << 16;  // groups per thread and ti
 struct FragCache {
     struct Entry {
         uint32_t recBegin = UINT32_MAX, recEnd = 0;  // empty: begin > end, which no draw has
-        uint32_t start = 0, stop = 0;                // groups[start, stop)
+        uint32_t start = 0, stop = 0;  // groups[start, stop)
     };
     std::vector<FragGroup> groups;
     std::vector<Entry> table;
@@ -43,9 +43,7 @@ struct FragCache {
         table.assign(cap, Entry{});
         used = 0;
     }
-    static size_t hash(uint32_t b, uint32_t e) {
-        return size_t((uint64_t(b) << 32 | e) * 0x9E3779B97F4A7C15ull >> 40);
-    }
+    static size_t hash(uint32_t b, uint32_t e) { return size_t((uint64_t(b) << 32 | e) * 0x9E3779B97F4A7C15ull >> 40); }
     // The entry of [b, e), or the empty slot where it would go.
     Entry& find(uint32_t b, uint32_t e) {
         const size_t mask = table.size() - 1;

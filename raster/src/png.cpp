@@ -59,13 +59,8 @@ void writeDepthPng(const DepthImage& image, const std::filesystem::path& path, c
 void writeMaskPng(int width, int height, std::span<const uint8_t> mask, const std::filesystem::path& path) {
     if (width <= 0 || height <= 0 || mask.size() != size_t(width) * size_t(height))
         throw InputError(path.string(), "mask has the wrong size");
-    static constexpr std::array<std::array<uint8_t, 3>, 7> palette{{{0, 0, 0},
-                                                                     {255, 255, 255},
-                                                                     {255, 0, 0},
-                                                                     {0, 200, 0},
-                                                                     {0, 64, 255},
-                                                                     {255, 220, 0},
-                                                                     {255, 0, 255}}};
+    static constexpr std::array<std::array<uint8_t, 3>, 7> palette{
+        {{0, 0, 0}, {255, 255, 255}, {255, 0, 0}, {0, 200, 0}, {0, 64, 255}, {255, 220, 0}, {255, 0, 255}}};
     std::vector<uint8_t> px(size_t(width) * size_t(height) * 3);
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {

@@ -33,10 +33,8 @@ void drawnChunks(const CommandList& list, Command::Op op, RecordSet<Rec>& set) {
     if (set.ranges.size() * 16 < size_t(hi - lo) || set.ranges.size() < 64) {
         std::sort(set.ranges.begin(), set.ranges.end());
         for (const auto& r : set.ranges) {
-            if (!merged.empty() && r[0] <= merged.back()[1])
-                merged.back()[1] = std::max(merged.back()[1], r[1]);
-            else
-                merged.push_back(r);
+            if (!merged.empty() && r[0] <= merged.back()[1]) merged.back()[1] = std::max(merged.back()[1], r[1]);
+            else merged.push_back(r);
         }
     } else {
         set.coverDiff.assign(size_t(hi - lo) + 1, 0);
@@ -57,8 +55,12 @@ void drawnChunks(const CommandList& list, Command::Op op, RecordSet<Rec>& set) {
         for (uint32_t b = r[0]; b < r[1]; b += kSetupChunk) set.chunks.push_back({b, std::min(r[1], b + kSetupChunk)});
 }
 
-TileRect tileRectOf(const EdgeTri& r, const TileGrid& grid) { return grid.of(r.x0, r.y0, r.x1, r.y1); }
-TileRect tileRectOf(const ConsRec& r, const TileGrid& grid) { return grid.of(r.t.x0, r.t.y0, r.t.x1, r.t.y1); }
+TileRect tileRectOf(const EdgeTri& r, const TileGrid& grid) {
+    return grid.of(r.x0, r.y0, r.x1, r.y1);
+}
+TileRect tileRectOf(const ConsRec& r, const TileGrid& grid) {
+    return grid.of(r.t.x0, r.t.y0, r.t.x1, r.t.y1);
+}
 
 // Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, emit)`
 // calls emit(record) for each record of triangle t and returns its TriFlags (`scratch`, a Scratch
@@ -127,46 +129,43 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     drawnChunks(list, Command::Op::Draw, out);
     SetupParams params = in.params;
     params.dropEmpty = true;
-    buildRecords<SubTriangles>(
-        out, in.triangles.size(), in.grid, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
-            SnappedTri* sub = scratch.sub;
-            const Triangle& tri = in.triangles[t];
-            int n = 0;
-            uint8_t flags;
-            const WinVertex &v0 = in.window[tri[0]], &v1 = in.window[tri[1]], &v2 = in.window[tri[2]];
-            const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
-            if (s0.inside && s1.inside && s2.inside) {  // the common case: vertices snapped once
-                if (trivialReject(v0, v1, v2, params)) {
-                    flags = kRejected;
-                } else {
-                    const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
-                    flags = setupUnclipped(v0, v1, v2, sx, sy, params, sub, n);
-                }
+    buildRecords<SubTriangles>(out, in.triangles.size(), in.grid, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
+        SnappedTri* sub = scratch.sub;
+        const Triangle& tri = in.triangles[t];
+        int n = 0;
+        uint8_t flags;
+        const WinVertex &v0 = in.window[tri[0]], &v1 = in.window[tri[1]], &v2 = in.window[tri[2]];
+        const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
+        if (s0.inside && s1.inside && s2.inside) {  // the common case: vertices snapped once
+            if (trivialReject(v0, v1, v2, params)) {
+                flags = kRejected;
             } else {
-                flags = setupTriangle(v0, v1, v2, params, sub, n);
+                const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
+                flags = setupUnclipped(v0, v1, v2, sx, sy, params, sub, n);
             }
-            for (int s = 0; s < n; ++s) {
-                EdgeTri e;
-                if (makeEdgeTri(sub[s], params, e)) emit(e);
-            }
-            return flags;
-        });
+        } else {
+            flags = setupTriangle(v0, v1, v2, params, sub, n);
+        }
+        for (int s = 0; s < n; ++s) {
+            EdgeTri e;
+            if (makeEdgeTri(sub[s], params, e)) emit(e);
+        }
+        return flags;
+    });
 }
 
 void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const WindowError& err,
                             RecordSet<ConsRec>& out) {
     drawnChunks(list, Command::Op::DrawConservative, out);
-    buildRecords<NoScratch>(out, in.triangles.size(), in.grid,
-                            [&](uint32_t t, NoScratch&, auto&& emit) -> uint8_t {
-                                const Triangle& tri = in.triangles[t];
-                                ConsRec rec;
-                                if (!setupConservative(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]],
-                                                       in.params, err, rec.t))
-                                    return kRejected;
-                                rec.e = consEdges(rec.t, in.params.subpixelBits);
-                                emit(rec);
-                                return 0;
-                            });
+    buildRecords<NoScratch>(out, in.triangles.size(), in.grid, [&](uint32_t t, NoScratch&, auto&& emit) -> uint8_t {
+        const Triangle& tri = in.triangles[t];
+        ConsRec rec;
+        if (!setupConservative(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]], in.params, err, rec.t))
+            return kRejected;
+        rec.e = consEdges(rec.t, in.params.subpixelBits);
+        emit(rec);
+        return 0;
+    });
 }
 
 }  // namespace cullide::raster::detail

@@ -30,11 +30,11 @@ struct ConsRec {
 // the record range [begin[first], end[first + count - 1]). Capacity is kept across lists.
 template <typename Rec>
 struct RecordSet {
-    std::vector<uint8_t> flags;        // per triangle drawn: TriFlags
+    std::vector<uint8_t> flags;  // per triangle drawn: TriFlags
     std::vector<uint32_t> begin, end;  // per triangle drawn: its records
     std::vector<Rec> records;
     std::vector<TileRect> tiles;  // per record: the tiles of its pixel rectangle
-    TileBins bins;                // per tile: the records whose rectangle holds it
+    TileBins bins;  // per tile: the records whose rectangle holds it
 
     // Scratch of setup and binning.
     std::vector<std::array<uint32_t, 2>> ranges, chunks;

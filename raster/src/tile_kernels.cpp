@@ -65,10 +65,10 @@ void rasterizeInTile(const EdgeTri& t, int bx0, int by0, int bx1, int by1, uint3
 // target does not enable it), so the same fragments, depths and results bit for bit. The lanes
 // past the record's right end or outside it are masked off; masked loads and stores touch no
 // other pixel (the neighbouring tile belongs to another thread).
-alignas(16) constexpr int32_t kLaneMasks[16][4] = {
-    {0, 0, 0, 0},   {-1, 0, 0, 0},   {0, -1, 0, 0},   {-1, -1, 0, 0},   {0, 0, -1, 0},   {-1, 0, -1, 0},
-    {0, -1, -1, 0}, {-1, -1, -1, 0}, {0, 0, 0, -1},   {-1, 0, 0, -1},   {0, -1, 0, -1},  {-1, -1, 0, -1},
-    {0, 0, -1, -1}, {-1, 0, -1, -1}, {0, -1, -1, -1}, {-1, -1, -1, -1}};
+alignas(16) constexpr int32_t kLaneMasks[16][4] = {{0, 0, 0, 0},   {-1, 0, 0, 0},   {0, -1, 0, 0},   {-1, -1, 0, 0},
+                                                   {0, 0, -1, 0},  {-1, 0, -1, 0},  {0, -1, -1, 0},  {-1, -1, -1, 0},
+                                                   {0, 0, 0, -1},  {-1, 0, 0, -1},  {0, -1, 0, -1},  {-1, -1, 0, -1},
+                                                   {0, 0, -1, -1}, {-1, 0, -1, -1}, {0, -1, -1, -1}, {-1, -1, -1, -1}};
 
 // The depth test of four lanes at once (unsigned comparisons through the signed ones, sign bits
 // flipped), for the lanes in `lanes`.
@@ -91,8 +91,8 @@ __attribute__((target("avx2"))) inline __m128i depthTest4(__m128i incoming, __m1
 
 template <DepthFunc F, bool Float, bool Record>
 __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int bx0, int by0, int bx1, int by1,
-                                                        uint32_t* depth, size_t stride, bool mask, int bits,
-                                                        uint64_t& fragments, uint64_t& passed, FragGroup*& rec) {
+                                                         uint32_t* depth, size_t stride, bool mask, int bits,
+                                                         uint64_t& fragments, uint64_t& passed, FragGroup*& rec) {
     const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
     const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
     if (x0 > x1 || y0 > y1) return;
@@ -125,7 +125,8 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
             const int inside = ~outside & valid;
             if (inside == 0) continue;
             // clampDepth and the encoding of rules.h, lane by lane.
-            __m256d z = _mm256_add_pd(row, _mm256_mul_pd(dzdx, _mm256_sub_pd(_mm256_add_pd(_mm256_set1_pd(double(i)), centres), planeX0)));
+            __m256d z = _mm256_add_pd(
+                row, _mm256_mul_pd(dzdx, _mm256_sub_pd(_mm256_add_pd(_mm256_set1_pd(double(i)), centres), planeX0)));
             z = _mm256_and_pd(z, _mm256_cmp_pd(z, zero, _CMP_GT_OQ));  // !(z > 0): +0 (NaN too)
             z = _mm256_blendv_pd(z, one, _mm256_cmp_pd(z, one, _CMP_GT_OQ));
             __m128i incoming;
@@ -185,7 +186,7 @@ void replayFragments(const FragGroup* g, const FragGroup* end, uint32_t* depth, 
 #ifdef CULLIDE_RASTER_AVX2
 template <DepthFunc F>
 __attribute__((target("avx2"))) void replayFragmentsAvx2(const FragGroup* g, const FragGroup* end, uint32_t* depth,
-                                                        bool mask, uint64_t& fragments, uint64_t& passed) {
+                                                         bool mask, uint64_t& fragments, uint64_t& passed) {
     uint64_t frag = 0, pass = 0;
     for (; g != end; ++g) {
         const __m128i lanes = _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[g->lanes]));
@@ -274,10 +275,8 @@ namespace {
 // A draw's samples that passed, added to its query's count (the tile's list stays in query order).
 void countQuery(TileOut& out, int32_t query, uint64_t n) {
     if (query < 0 || n == 0) return;
-    if (!out.queries.empty() && out.queries.back().query == uint32_t(query))
-        out.queries.back().count += n;
-    else
-        out.queries.push_back({uint32_t(query), n});
+    if (!out.queries.empty() && out.queries.back().query == uint32_t(query)) out.queries.back().count += n;
+    else out.queries.push_back({uint32_t(query), n});
 }
 
 }  // namespace

@@ -48,8 +48,8 @@ struct TileJob {
     const DepthFormat& format;
     int width, height;
     TileGrid grid;
-    uint32_t* depth;     // width x height
-    uint32_t* ilo;       // the interval buffer (conservative lists only)
+    uint32_t* depth;  // width x height
+    uint32_t* ilo;  // the interval buffer (conservative lists only)
     uint32_t* ihi;
 };
 

@@ -16,8 +16,8 @@ constexpr int kMaxPolygon = 9;  // a triangle clipped by six planes has at most 
 
 // Signed distance to one clip plane; inside when >= 0.
 struct ClipPlane {
-    int axis;      // 0: x, 1: y, 2: z
-    double sign;   // +1: coordinate >= bound; -1: coordinate <= bound
+    int axis;  // 0: x, 1: y, 2: z
+    double sign;  // +1: coordinate >= bound; -1: coordinate <= bound
     double bound;
     double distance(const WinVertex& v) const {
         const double c = axis == 0 ? v.x : axis == 1 ? v.y : v.z;
@@ -47,7 +47,9 @@ int clipPolygon(const WinVertex* src, int n, const ClipPlane& plane, WinVertex* 
     return m;
 }
 
-bool finite(const WinVertex& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(const WinVertex& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 // The plane through three window vertices; false when they are collinear in x, y (or the
 // gradients overflow).
@@ -122,8 +124,8 @@ bool trivialReject(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2
     // snapped x is <= 0, left of every centre (>= 1/2); likewise for the others.
     const double W = params.width, H = params.height;
     return (v0.x < 0 && v1.x < 0 && v2.x < 0) || (v0.x > W && v1.x > W && v2.x > W) ||
-           (v0.y < 0 && v1.y < 0 && v2.y < 0) || (v0.y > H && v1.y > H && v2.y > H) ||
-           (v0.z < 0 && v1.z < 0 && v2.z < 0) || (v0.z > 1 && v1.z > 1 && v2.z > 1);
+        (v0.y < 0 && v1.y < 0 && v2.y < 0) || (v0.y > H && v1.y > H && v2.y > H) ||
+        (v0.z < 0 && v1.z < 0 && v2.z < 0) || (v0.z > 1 && v1.z > 1 && v2.z > 1);
 }
 
 bool insideClipVolume(const WinVertex& v, const SetupParams& params) {
@@ -176,8 +178,12 @@ uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex&
 
 namespace {
 
-inline int64_t floorShift(int64_t v, int s) { return v >> s; }        // floor(v / 2^s), arithmetic shift
-inline int64_t ceilShift(int64_t v, int s) { return -((-v) >> s); }   // ceil(v / 2^s)
+inline int64_t floorShift(int64_t v, int s) {
+    return v >> s;
+}  // floor(v / 2^s), arithmetic shift
+inline int64_t ceilShift(int64_t v, int s) {
+    return -((-v) >> s);
+}  // ceil(v / 2^s)
 
 }  // namespace
 

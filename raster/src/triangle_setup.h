@@ -28,7 +28,7 @@ struct SnappedTri {
 
 enum TriFlags : uint8_t {
     kRejected = 1,  // outside the viewport or the depth range: nothing to draw
-    kClipped = 2,   // needed clipping against the depth range or the guard band
+    kClipped = 2,  // needed clipping against the depth range or the guard band
     kZeroArea = 4,  // not rejected, but no sub-triangle with non-zero snapped area
 };
 

@@ -24,16 +24,16 @@ struct WinV {
 };
 
 // Stored value of a window depth, clamped (rule 7).
-uint32_t enc(double z, const DepthFormat& f) { return encodeDepth(z, f); }
+uint32_t enc(double z, const DepthFormat& f) {
+    return encodeDepth(z, f);
+}
 
 // Interval of stored values of a clear depth: exact when representable, else +-1 step.
 void clearInterval(double c, const DepthFormat& f, uint32_t& lo, uint32_t& hi) {
     const uint32_t k = enc(c, f);
     bool exact;
-    if (f.kind == DepthFormat::Kind::Float32)
-        exact = double(float(c)) == c;
-    else
-        exact = double(k) / (std::ldexp(1.0, f.bits) - 1.0) == c;
+    if (f.kind == DepthFormat::Kind::Float32) exact = double(float(c)) == c;
+    else exact = double(k) / (std::ldexp(1.0, f.bits) - 1.0) == c;
     lo = hi = k;
     if (!exact) {
         lo = k > 0 ? k - 1 : 0;
@@ -80,8 +80,8 @@ Plane planeFrom(const WinV& p0, const WinV& p1, const WinV& p2) {
 }  // namespace
 
 QueryIntervals::QueryIntervals(const IntervalOptions& options) : options_(options) {
-    if (options.subpixelBits < kMinSubpixelBits || options.subpixelBits > kMaxSubpixelBits || options.otherSubpixelBits < 1 ||
-        !(options.depthLsb >= 0) || !(options.depthFloatUlps >= 0))
+    if (options.subpixelBits < kMinSubpixelBits || options.subpixelBits > kMaxSubpixelBits ||
+        options.otherSubpixelBits < 1 || !(options.depthLsb >= 0) || !(options.depthFloatUlps >= 0))
         throw InputError("interval options", "subpixel bits or depth margins out of range");
 }
 
@@ -105,8 +105,8 @@ void QueryIntervals::setView(const OrthoView& view) {
     haveView_ = true;
 }
 
-std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std::vector<uint64_t>* exact, bool* exactValid,
-                                                   CoverageCapture* capture) {
+std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std::vector<uint64_t>* exact,
+                                                   bool* exactValid, CoverageCapture* capture) {
     if (!haveView_) throw InputError("command list", "execute() before setView()");
     const uint32_t nq = list.queryCount();
     std::vector<QueryInterval> out(nq);
@@ -153,7 +153,8 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
                     const Triangle& tri = triangles_[t];
                     const WinV v[3] = {win[tri[0]], win[tri[1]], win[tri[2]]};
                     bool finite = true;
-                    for (const WinV& p : v) finite = finite && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+                    for (const WinV& p : v)
+                        finite = finite && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
                     if (!finite) continue;
                     // Trivially outside (rule 2): nothing under any snapping either.
                     if ((v[0].x < 0 && v[1].x < 0 && v[2].x < 0) || (v[0].x > W && v[1].x > W && v[2].x > W) ||
@@ -174,21 +175,26 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
                     if (!plane.valid && area2 != 0) {
                         const double unit = std::ldexp(1.0, -S);
                         WinV s[3];
-                        for (int k = 0; k < 3; ++k) s[k] = {double(sx[o[k]]) * unit, double(sy[o[k]]) * unit, v[o[k]].z};
+                        for (int k = 0; k < 3; ++k)
+                            s[k] = {double(sx[o[k]]) * unit, double(sy[o[k]]) * unit, v[o[k]].z};
                         plane = planeFrom(s[0], s[1], s[2]);
                         if (!plane.valid) plane = {s[0].x, s[0].y, s[0].z, 0.0, 0.0, true};
                     }
                     const double zmin = std::min({v[0].z, v[1].z, v[2].z}), zmax = std::max({v[0].z, v[1].z, v[2].z});
-                    const double slopeMargin =
-                        plane.valid ? options_.depthFloatUlps * floatUnit * (1.0 + (std::abs(plane.dzdx) + std::abs(plane.dzdy)) * double(W + H))
-                                    : 0.0;
+                    const double slopeMargin = plane.valid ? options_.depthFloatUlps * floatUnit *
+                            (1.0 + (std::abs(plane.dzdx) + std::abs(plane.dzdy)) * double(W + H))
+                                                           : 0.0;
                     const double depthMargin = options_.depthLsb * res + slopeMargin;
 
                     // Pixel range: the snapped bounding box grown by r units and one pixel.
-                    const int64_t minx = std::min({sx[0], sx[1], sx[2]}) - r, maxx = std::max({sx[0], sx[1], sx[2]}) + r;
-                    const int64_t miny = std::min({sy[0], sy[1], sy[2]}) - r, maxy = std::max({sy[0], sy[1], sy[2]}) + r;
-                    const int64_t i0 = std::max<int64_t>(((minx - half) >> S), 0), i1 = std::min<int64_t>(((maxx - half) >> S) + 1, W - 1);
-                    const int64_t j0 = std::max<int64_t>(((miny - half) >> S), 0), j1 = std::min<int64_t>(((maxy - half) >> S) + 1, H - 1);
+                    const int64_t minx = std::min({sx[0], sx[1], sx[2]}) - r,
+                                  maxx = std::max({sx[0], sx[1], sx[2]}) + r;
+                    const int64_t miny = std::min({sy[0], sy[1], sy[2]}) - r,
+                                  maxy = std::max({sy[0], sy[1], sy[2]}) + r;
+                    const int64_t i0 = std::max<int64_t>(((minx - half) >> S), 0),
+                                  i1 = std::min<int64_t>(((maxx - half) >> S) + 1, W - 1);
+                    const int64_t j0 = std::max<int64_t>(((miny - half) >> S), 0),
+                                  j1 = std::min<int64_t>(((maxy - half) >> S) + 1, H - 1);
                     // Edges of the oriented snapped triangle.
                     int64_t ax[3], ay[3], dx[3], dy[3], dl1[3];
                     bool incl[3];
@@ -287,7 +293,9 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
 TeeBackend::TeeBackend(DepthBackend& reference, DepthBackend& other, const IntervalOptions& options)
     : reference_(reference), other_(other), intervals_(options) {}
 
-std::string TeeBackend::describe() const { return "tee: " + reference_.describe() + " | " + other_.describe(); }
+std::string TeeBackend::describe() const {
+    return "tee: " + reference_.describe() + " | " + other_.describe();
+}
 
 void TeeBackend::setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) {
     reference_.setGeometry(positions, triangles);
@@ -334,6 +342,8 @@ std::vector<uint64_t> TeeBackend::execute(const CommandList& list) {
     return ref;
 }
 
-DepthImage TeeBackend::readDepth() { return reference_.readDepth(); }
+DepthImage TeeBackend::readDepth() {
+    return reference_.readDepth();
+}
 
 }  // namespace cullide::raster

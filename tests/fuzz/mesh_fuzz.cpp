@@ -34,8 +34,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         try {
             const cullide::Mesh m = cullide::loadMesh(path);
             cullide::validateMesh(m, path.string());  // must not throw for what loadMesh returned
-        } catch (const cullide::InputError&) {
-        }
+        } catch (const cullide::InputError&) {}
     }
     return 0;
 }

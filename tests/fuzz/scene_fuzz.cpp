@@ -26,14 +26,16 @@ const std::filesystem::path& folder() {
     static const std::filesystem::path dir = [] {
         auto d = std::filesystem::temp_directory_path() / ("cullide_scene_fuzz_" + std::to_string(::getpid()));
         std::filesystem::create_directories(d);
-        const std::string off = "OFF\n7 3 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n2 1 0\n3 0.5 0\n3 4 5 1\n4 0 1 2 3\n5 1 4 6 5 2\n";
+        const std::string off =
+            "OFF\n7 3 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n2 1 0\n3 0.5 0\n3 4 5 1\n4 0 1 2 3\n5 1 4 6 5 2\n";
         writeText(d / "polys.off", off);
         writeText(d / "polys_moved.off", off);
         writeText(d / "polys_ascii.ply",
                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
         writeText(d / "cube_binary.stl",
-                  "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\nendloop\nendfacet\nendsolid t\n");
+                  "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 "
+                  "0\nendloop\nendfacet\nendsolid t\n");
         return d;
     }();
     return dir;
@@ -47,7 +49,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     try {
         const cullide::Animation a = cullide::loadScene(path);
         for (size_t f = 0; f < a.frameCount(); ++f) (void)a.sceneAt(f);
-    } catch (const cullide::InputError&) {
-    }
+    } catch (const cullide::InputError&) {}
     return 0;
 }

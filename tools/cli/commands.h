@@ -27,8 +27,9 @@ struct FrameRange {
 inline FrameRange selectFrames(const Animation& animation, long frame, const std::string& path) {
     if (frame < 0) return {0, animation.frameCount()};
     if (size_t(frame) >= animation.frameCount())
-        throw InputError("option --frame", "frame " + std::to_string(frame) + " requested, but " + path + " has " +
-                                               std::to_string(animation.frameCount()) + " frame(s)");
+        throw InputError("option --frame",
+                         "frame " + std::to_string(frame) + " requested, but " + path + " has " +
+                             std::to_string(animation.frameCount()) + " frame(s)");
     return {size_t(frame), size_t(frame) + 1};
 }
 

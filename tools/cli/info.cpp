@@ -40,12 +40,12 @@ nlohmann::ordered_json statsJson(const MeshStats& s) {
 void printStats(const char* indent, const MeshStats& s) {
     std::printf("%svertices %zu, triangles %zu\n", indent, s.vertices, s.triangles);
     if (!s.bounds.empty())
-        std::printf("%sbounds [%g, %g, %g] .. [%g, %g, %g]\n", indent, s.bounds.lo.x(), s.bounds.lo.y(), s.bounds.lo.z(),
-                    s.bounds.hi.x(), s.bounds.hi.y(), s.bounds.hi.z());
-    std::printf("%sdegenerate triangles %zu, connected components %zu, duplicate vertices %zu, "
-                "duplicate triangles %zu, unreferenced vertices %zu\n",
-                indent, s.degenerateTriangles, s.components, s.duplicateVertices, s.duplicateTriangles,
-                s.unreferencedVertices);
+        std::printf("%sbounds [%g, %g, %g] .. [%g, %g, %g]\n", indent, s.bounds.lo.x(), s.bounds.lo.y(),
+                    s.bounds.lo.z(), s.bounds.hi.x(), s.bounds.hi.y(), s.bounds.hi.z());
+    std::printf(
+        "%sdegenerate triangles %zu, connected components %zu, duplicate vertices %zu, "
+        "duplicate triangles %zu, unreferenced vertices %zu\n",
+        indent, s.degenerateTriangles, s.components, s.duplicateVertices, s.duplicateTriangles, s.unreferencedVertices);
 }
 
 int runInfo(const InfoOptions& o) {
@@ -57,7 +57,9 @@ int runInfo(const InfoOptions& o) {
         nlohmann::ordered_json objects = nlohmann::ordered_json::array();
         MeshStats total;
         Bounds bounds;
-        if (!o.json) std::printf("%s: %zu object(s), %zu frame(s)\n", path.c_str(), scene.objects.size(), animation.frameCount());
+        if (!o.json)
+            std::printf("%s: %zu object(s), %zu frame(s)\n", path.c_str(), scene.objects.size(),
+                        animation.frameCount());
         for (size_t i = 0; i < scene.objects.size(); ++i) {
             const MeshStats s = computeStats(scene.worldMesh(i));
             total.vertices += s.vertices;
@@ -78,8 +80,8 @@ int runInfo(const InfoOptions& o) {
             }
         }
         if (o.json) {
-            nlohmann::ordered_json j = {{"path", path}, {"frames", animation.frameCount()}, {"frame", o.frame},
-                                        {"objects", objects}};
+            nlohmann::ordered_json j = {
+                {"path", path}, {"frames", animation.frameCount()}, {"frame", o.frame}, {"objects", objects}};
             j["total"] = statsJson(total);
             all.push_back(j);
         } else if (scene.objects.size() > 1) {
@@ -95,8 +97,9 @@ int runInfo(const InfoOptions& o) {
 
 void addInfoCommand(CLI::App& app, Action& action) {
     auto o = std::make_shared<InfoOptions>();
-    CLI::App* sub = app.add_subcommand("info", "Describe scenes or meshes: objects, vertices, triangles, bounds, "
-                                               "degenerate triangles, components, duplicate vertices");
+    CLI::App* sub = app.add_subcommand("info",
+                                       "Describe scenes or meshes: objects, vertices, triangles, bounds, "
+                                       "degenerate triangles, components, duplicate vertices");
     sub->add_option("paths", o->paths, "Scene files (.json) or meshes (.obj .off .ply .stl)")->required();
     sub->add_flag("--json", o->json, "Print JSON for machines instead of text");
     sub->add_option("--frame", o->frame, "Animation frame to describe (default 0)")->check(CLI::NonNegativeNumber);

@@ -10,8 +10,9 @@
 namespace {
 
 int run(int argc, char** argv) {
-    CLI::App app{"cullide: image-space collision and self-intersection culling (Cullide and its "
-                 "self-intersection variant), with a deterministic CPU reference rasterizer"};
+    CLI::App app{
+        "cullide: image-space collision and self-intersection culling (Cullide and its "
+        "self-intersection variant), with a deterministic CPU reference rasterizer"};
     app.require_subcommand(1);
     app.set_version_flag("--version", std::string("cullide 0.1.0 (") + cullide::oracle::libraryVersions() + ")");
 

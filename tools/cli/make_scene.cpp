@@ -103,8 +103,7 @@ void addMakeSceneCommand(CLI::App& app, Action& action) {
         const bool cylinders = o->kind == Kind::Cylinders;
         if (cylinders && sub->count("--mesh"))
             throw CLI::ValidationError("--mesh", "does not apply to 'cylinders' (generated, not made from a mesh)");
-        if (!cylinders && sub->count("--count"))
-            throw CLI::ValidationError("--count", "applies to 'cylinders' only");
+        if (!cylinders && sub->count("--count")) throw CLI::ValidationError("--count", "applies to 'cylinders' only");
         if (!cylinders && sub->count("--seed"))
             throw CLI::ValidationError("--seed", "applies to 'cylinders' only (the other kinds are not random)");
         o->resampleTwist = o->kind == Kind::Twist && sub->count("--triangles") > 0;

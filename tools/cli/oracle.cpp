@@ -48,12 +48,13 @@ int runOracle(const OracleCommandOptions& o) {
         const oracle::Truth t = oracle::findIntersections(scene, options);
         size_t self = 0;
         for (const oracle::IntersectingPair& p : t.pairs) self += p.selfPair();
-        std::printf("frame %zu: %zu intersecting pair(s): %zu crossing, %zu touching (%zu within objects, %zu between); "
-                    "%zu degenerate triangle(s); %zu triangles, %zu candidate pairs; %.1f ms (setup %.1f, build %.1f, "
-                    "collide+exact %.1f, sort %.1f)\n",
-                    f, t.pairs.size(), t.count(oracle::PairClass::Crossing), t.count(oracle::PairClass::Touching), self,
-                    t.pairs.size() - self, t.degenerate.size(), t.trianglesTested, t.candidatePairs, 1e3 * t.totalSeconds,
-                    1e3 * t.setupSeconds, 1e3 * t.buildSeconds, 1e3 * t.collideSeconds, 1e3 * t.sortSeconds);
+        std::printf(
+            "frame %zu: %zu intersecting pair(s): %zu crossing, %zu touching (%zu within objects, %zu between); "
+            "%zu degenerate triangle(s); %zu triangles, %zu candidate pairs; %.1f ms (setup %.1f, build %.1f, "
+            "collide+exact %.1f, sort %.1f)\n",
+            f, t.pairs.size(), t.count(oracle::PairClass::Crossing), t.count(oracle::PairClass::Touching), self,
+            t.pairs.size() - self, t.degenerate.size(), t.trianglesTested, t.candidatePairs, 1e3 * t.totalSeconds,
+            1e3 * t.setupSeconds, 1e3 * t.buildSeconds, 1e3 * t.collideSeconds, 1e3 * t.sortSeconds);
         if (o.json.empty()) continue;
         // Rows sorted as tuples; a degenerate (o, t) sorts among the pairs as (o, t, o, t).
         struct Row {
@@ -61,8 +62,10 @@ int runOracle(const OracleCommandOptions& o) {
             const char* cls;
         };
         std::vector<Row> rows;
-        for (const oracle::IntersectingPair& p : t.pairs) rows.push_back({p.objectA, p.triangleA, p.objectB, p.triangleB, toString(p.cls)});
-        for (const oracle::TriangleRef& d : t.degenerate) rows.push_back({d.object, d.triangle, d.object, d.triangle, "degenerate"});
+        for (const oracle::IntersectingPair& p : t.pairs)
+            rows.push_back({p.objectA, p.triangleA, p.objectB, p.triangleB, toString(p.cls)});
+        for (const oracle::TriangleRef& d : t.degenerate)
+            rows.push_back({d.object, d.triangle, d.object, d.triangle, "degenerate"});
         std::sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) {
             return std::tie(a.oa, a.ta, a.ob, a.tb) < std::tie(b.oa, b.ta, b.ob, b.tb);
         });
@@ -78,7 +81,8 @@ int runOracle(const OracleCommandOptions& o) {
     if (!o.json.empty()) {
         nlohmann::ordered_json objects = nlohmann::ordered_json::array();
         for (const Object& obj : animation.scene.objects) objects.push_back(obj.name);
-        const nlohmann::ordered_json j = {{"scene", o.scene}, {"weld_by_position", o.weld}, {"objects", objects}, {"frames", frames}};
+        const nlohmann::ordered_json j = {
+            {"scene", o.scene}, {"weld_by_position", o.weld}, {"objects", objects}, {"frames", frames}};
         writeFileAtomically(o.json, j.dump(1) + "\n");
     }
     return 0;
@@ -98,24 +102,28 @@ PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const Cu
         for (const study::MissedPair& m : r.missed)
             promised += promisesToKeep(options.method, m.pair.cls == oracle::PairClass::Crossing, m.pair.selfPair());
         out.guaranteeBroken = promised > 0;
-        std::printf("  check: %zu intersecting pair(s) (%zu crossing, %zu touching); false prunes: %zu triangle(s) "
-                    "(%zu crossing, %zu touching), %zu pair(s) missed (%zu crossing, %zu touching; %zu the method "
-                    "promises to keep); false positives %zu; efficiency %.4f (%zu of %zu PCS triangles collide)\n",
-                    truth.pairs.size(), truth.count(oracle::PairClass::Crossing), truth.count(oracle::PairClass::Touching),
-                    r.falsePruneCount(), r.falsePrunes[X], r.falsePrunes[T], r.missedPairs[X] + r.missedPairs[T],
-                    r.missedPairs[X], r.missedPairs[T], promised, r.falsePositives, r.efficiency, r.collidingInPcs,
-                    r.pcsTriangles);
+        std::printf(
+            "  check: %zu intersecting pair(s) (%zu crossing, %zu touching); false prunes: %zu triangle(s) "
+            "(%zu crossing, %zu touching), %zu pair(s) missed (%zu crossing, %zu touching; %zu the method "
+            "promises to keep); false positives %zu; efficiency %.4f (%zu of %zu PCS triangles collide)\n",
+            truth.pairs.size(), truth.count(oracle::PairClass::Crossing), truth.count(oracle::PairClass::Touching),
+            r.falsePruneCount(), r.falsePrunes[X], r.falsePrunes[T], r.missedPairs[X] + r.missedPairs[T],
+            r.missedPairs[X], r.missedPairs[T], promised, r.falsePositives, r.efficiency, r.collidingInPcs,
+            r.pcsTriangles);
         nlohmann::ordered_json missed = nlohmann::ordered_json::array();
         for (const study::MissedPair& m : r.missed) {
             nlohmann::ordered_json dirs = nlohmann::ordered_json::array();
             for (const study::DirectionMeasure& d : m.directions)
-                dirs.push_back({{"penetration", std::isnan(d.penetration) ? nlohmann::ordered_json() : nlohmann::ordered_json(d.penetration)},
-                                {"depth_unit", d.depthUnit},
-                                {"pixel_centre", d.pixelCentre}});
-            missed.push_back({{"pair", {m.pair.objectA, m.pair.triangleA, m.pair.objectB, m.pair.triangleB, toString(m.pair.cls)}},
-                              {"missing", {m.missingA, m.missingB}},
-                              {"edge_on", {m.edgeOnA, m.edgeOnB}},
-                              {"directions", dirs}});
+                dirs.push_back(
+                    {{"penetration",
+                      std::isnan(d.penetration) ? nlohmann::ordered_json() : nlohmann::ordered_json(d.penetration)},
+                     {"depth_unit", d.depthUnit},
+                     {"pixel_centre", d.pixelCentre}});
+            missed.push_back(
+                {{"pair", {m.pair.objectA, m.pair.triangleA, m.pair.objectB, m.pair.triangleB, toString(m.pair.cls)}},
+                 {"missing", {m.missingA, m.missingB}},
+                 {"edge_on", {m.edgeOnA, m.edgeOnB}},
+                 {"directions", dirs}});
         }
         out.json["check"] = {{"crossing_pairs", truth.count(oracle::PairClass::Crossing)},
                              {"touching_pairs", truth.count(oracle::PairClass::Touching)},
@@ -128,12 +136,14 @@ PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const Cu
     }
     if (exact) {
         const oracle::Truth t = oracle::exactStage(scene, pcs);
-        std::printf("  exact: %zu intersecting pair(s) among the PCS (%zu crossing, %zu touching), %zu degenerate "
-                    "triangle(s); %.1f ms\n",
-                    t.pairs.size(), t.count(oracle::PairClass::Crossing), t.count(oracle::PairClass::Touching),
-                    t.degenerate.size(), 1e3 * t.totalSeconds);
+        std::printf(
+            "  exact: %zu intersecting pair(s) among the PCS (%zu crossing, %zu touching), %zu degenerate "
+            "triangle(s); %.1f ms\n",
+            t.pairs.size(), t.count(oracle::PairClass::Crossing), t.count(oracle::PairClass::Touching),
+            t.degenerate.size(), 1e3 * t.totalSeconds);
         nlohmann::ordered_json pairs = nlohmann::ordered_json::array();
-        for (const oracle::IntersectingPair& p : t.pairs) pairs.push_back({p.objectA, p.triangleA, p.objectB, p.triangleB, toString(p.cls)});
+        for (const oracle::IntersectingPair& p : t.pairs)
+            pairs.push_back({p.objectA, p.triangleA, p.objectB, p.triangleB, toString(p.cls)});
         out.json["exact"] = {{"crossing", t.count(oracle::PairClass::Crossing)},
                              {"touching", t.count(oracle::PairClass::Touching)},
                              {"seconds", t.totalSeconds},
@@ -144,8 +154,9 @@ PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const Cu
 
 void addOracleCommand(CLI::App& app, Action& action) {
     auto o = std::make_shared<OracleCommandOptions>();
-    CLI::App* sub = app.add_subcommand("oracle", "Find the truly intersecting triangle pairs of a scene, exactly "
-                                                  "(grid or Embree broad phase, exact predicates), by class");
+    CLI::App* sub = app.add_subcommand("oracle",
+                                       "Find the truly intersecting triangle pairs of a scene, exactly "
+                                       "(grid or Embree broad phase, exact predicates), by class");
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
     sub->add_option("--json", o->json, "Write the pairs as [objectA, triA, objectB, triB, class] rows, sorted");
     sub->add_option("--frame", o->frame, "Only this frame (default: every frame)")->check(CLI::NonNegativeNumber);

@@ -10,8 +10,8 @@
 namespace cullide::cli {
 
 struct PcsCheck {
-    nlohmann::ordered_json json;    // {"check": {...}} and/or {"exact": {...}}
-    bool guaranteeBroken = false;   // a false prune of a pair the method promises to keep
+    nlohmann::ordered_json json;  // {"check": {...}} and/or {"exact": {...}}
+    bool guaranteeBroken = false;  // a false prune of a pair the method promises to keep
 };
 
 // Prints one line per requested measure and returns them as JSON. --check: false prunes by class

@@ -11,7 +11,7 @@ namespace cullide::cli {
 struct PcsPictures::State {
     std::unique_ptr<raster::CpuBackend> backend;
     FlatScene flat;  // the scene as one geometry
-    DepthImage scene;                     // the whole scene's depth
+    DepthImage scene;  // the whole scene's depth
     int width = 0, height = 0;
 };
 
@@ -25,8 +25,8 @@ PcsPictures::PcsPictures(const Scene& scene, const Vec3d& direction, int width, 
     const Mesh& m = s.flat.mesh;
     s.backend->setGeometry(m.positions, m.triangles);
     const TriangleRange all{0, uint32_t(m.triangles.size())};
-    s.backend->setView(fitView(m.positions, m.triangles, {&all, 1}, direction.normalized(), width, height,
-                               DepthFormat::unorm(24)));
+    s.backend->setView(
+        fitView(m.positions, m.triangles, {&all, 1}, direction.normalized(), width, height, DepthFormat::unorm(24)));
     CommandList list;
     list.clear(1.0);
     list.draw(all.first, all.count);

@@ -47,7 +47,8 @@ int runPlot(const PlotOptions& o) {
     if (pid < 0) throw InputError("plot", "cannot start " + python);
     if (pid == 0) {
         execv(argv[0], argv.data());
-        std::fprintf(stderr, "cullide: error: plot: cannot run %s (set CULLIDE_PYTHON to a python3 with matplotlib)\n", argv[0]);
+        std::fprintf(stderr, "cullide: error: plot: cannot run %s (set CULLIDE_PYTHON to a python3 with matplotlib)\n",
+                     argv[0]);
         _exit(2);
     }
     int status = 0;
@@ -61,7 +62,8 @@ void addPlotCommand(CLI::App& app, Action& action) {
     auto o = std::make_shared<PlotOptions>();
     CLI::App* sub = app.add_subcommand(
         "plot", "Charts (PNG and SVG) of study results, stability sweeps, prune --json or Google Benchmark JSON");
-    sub->add_option("inputs", o->inputs, "study .csv/.jsonl, stability .csv, prune --json .json, cullide_bench JSON")->required();
+    sub->add_option("inputs", o->inputs, "study .csv/.jsonl, stability .csv, prune --json .json, cullide_bench JSON")
+        ->required();
     sub->add_option("-o,--out", o->out, "Folder for the charts")->capture_default_str();
     sub->add_option("--python", o->python, "Python with matplotlib (default $CULLIDE_PYTHON or /usr/bin/python3)");
     sub->callback([o, &action] { action = [o] { return runPlot(*o); }; });

@@ -51,8 +51,9 @@ int runPrune(const PruneOptions& o) {
     const Animation animation = loadScene(o.scene);
     const auto [first, last] = selectFrames(animation, o.frame, o.scene);
     if (!o.out.empty() && o.frame < 0 && animation.frameCount() > 1)
-        throw InputError("option --out", "the scene has " + std::to_string(animation.frameCount()) +
-                                             " frames; choose one with --frame to write its PLY");
+        throw InputError("option --out",
+                         "the scene has " + std::to_string(animation.frameCount()) +
+                             " frames; choose one with --frame to write its PLY");
 
     std::printf("%s: %s, %dx%d, %s, %zu direction(s), %s hierarchy (leaf %u, branching %u), %s\n", o.scene.c_str(),
                 toString(options.method), options.width, options.height, options.depth.name().c_str(),
@@ -87,18 +88,22 @@ int runPrune(const PruneOptions& o) {
         std::map<uint32_t, size_t> perObject;
         for (const PcsTriangle& p : r.pcs) ++perObject[p.object];
         const size_t total = scene.triangleCount();
-        std::printf("frame %zu: PCS %zu of %zu triangles (%.2f%%) in %zu object(s); %u level(s), %zu reducePCS calls, "
-                    "%zu triangles rendered, %zu queries; hierarchy %.1f ms, total %.1f ms\n",
-                    f, r.pcs.size(), total, total ? 100.0 * double(r.pcs.size()) / double(total) : 0.0,
-                    perObject.size(), r.levels, r.passes.size(), rendered, queries, 1e3 * r.hierarchySeconds,
-                    1e3 * r.totalSeconds);
+        std::printf(
+            "frame %zu: PCS %zu of %zu triangles (%.2f%%) in %zu object(s); %u level(s), %zu reducePCS calls, "
+            "%zu triangles rendered, %zu queries; hierarchy %.1f ms, total %.1f ms\n",
+            f, r.pcs.size(), total, total ? 100.0 * double(r.pcs.size()) / double(total) : 0.0, perObject.size(),
+            r.levels, r.passes.size(), rendered, queries, 1e3 * r.hierarchySeconds, 1e3 * r.totalSeconds);
         if (!o.json.empty()) {
             nlohmann::ordered_json pcs = nlohmann::ordered_json::array();
             for (const PcsTriangle& p : r.pcs) pcs.push_back({p.object, p.triangle});
             nlohmann::ordered_json passes = nlohmann::ordered_json::array();
             for (const PassStats& p : r.passes) passes.push_back(study::passJson(p));
-            frames.push_back({{"frame", f}, {"triangles", total}, {"pcs", pcs}, {"passes", passes},
-                              {"levels", r.levels}, {"hierarchy_seconds", r.hierarchySeconds},
+            frames.push_back({{"frame", f},
+                              {"triangles", total},
+                              {"pcs", pcs},
+                              {"passes", passes},
+                              {"levels", r.levels},
+                              {"hierarchy_seconds", r.hierarchySeconds},
                               {"total_seconds", r.totalSeconds}});
         }
         if (o.check || o.exact) {
@@ -111,15 +116,19 @@ int runPrune(const PruneOptions& o) {
     if (!o.json.empty()) {
         nlohmann::ordered_json objects = nlohmann::ordered_json::array();
         for (const Object& obj : animation.scene.objects) objects.push_back(obj.name);
-        nlohmann::ordered_json j = {
-            {"scene", o.scene},
-            {"options",
-             {{"method", toString(options.method)}, {"width", options.width}, {"height", options.height},
-              {"depth", options.depth.name()}, {"directions", nlohmann::ordered_json::array()},
-              {"hierarchy", toString(options.hierarchy.kind)}, {"leaf_size", options.hierarchy.leafSize},
-              {"branching", options.hierarchy.branching}, {"backend", backend->describe()}}},
-            {"objects", objects},
-            {"frames", frames}};
+        nlohmann::ordered_json j = {{"scene", o.scene},
+                                    {"options",
+                                     {{"method", toString(options.method)},
+                                      {"width", options.width},
+                                      {"height", options.height},
+                                      {"depth", options.depth.name()},
+                                      {"directions", nlohmann::ordered_json::array()},
+                                      {"hierarchy", toString(options.hierarchy.kind)},
+                                      {"leaf_size", options.hierarchy.leafSize},
+                                      {"branching", options.hierarchy.branching},
+                                      {"backend", backend->describe()}}},
+                                    {"objects", objects},
+                                    {"frames", frames}};
         for (const Vec3d& d : options.directions) j["options"]["directions"].push_back({d.x(), d.y(), d.z()});
         writeFileAtomically(o.json, j.dump(1) + "\n");
     }
@@ -130,18 +139,21 @@ int runPrune(const PruneOptions& o) {
 
 void addPruneCommand(CLI::App& app, Action& action) {
     auto o = std::make_shared<PruneOptions>();
-    CLI::App* sub = app.add_subcommand("prune", "Compute the potentially colliding set (PCS) of every frame of a scene");
+    CLI::App* sub =
+        app.add_subcommand("prune", "Compute the potentially colliding set (PCS) of every frame of a scene");
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
     sub->add_option("--method", o->cullide.method,
                     "original (Cullide, contacts kept) | modified (self-intersections kept) | reliable (no "
                     "intersecting triangle is ever pruned; CPU backend only; docs/reliable.md)")
         ->capture_default_str();
-    sub->add_option("--resolution", o->cullide.resolution, "Viewport: N or WxH pixels (1 to " + std::to_string(kMaxViewportSide) + " per side)")
+    sub->add_option("--resolution", o->cullide.resolution,
+                    "Viewport: N or WxH pixels (1 to " + std::to_string(kMaxViewportSide) + " per side)")
         ->capture_default_str();
     sub->add_option("--depth", o->cullide.depth, "Depth format: unorm bits 8..32 (e.g. 24, d16) or float")
         ->capture_default_str();
-    sub->add_option("--directions", o->cullide.directions,
-                    "View directions: 'axes' (+x -x +y -y +z -z), a count N (spread), or a list 'x,-y,z' / '1 0 0;0 1 1'")
+    sub->add_option(
+           "--directions", o->cullide.directions,
+           "View directions: 'axes' (+x -x +y -y +z -z), a count N (spread), or a list 'x,-y,z' / '1 0 0;0 1 1'")
         ->capture_default_str();
     sub->add_option("--hierarchy", o->cullide.hierarchy, "connectivity | random")->capture_default_str();
     sub->add_option("--leaf-size", o->cullide.leafSize, "Triangles per hierarchy leaf (1 to 1,000,000)")

@@ -76,7 +76,8 @@ int runStability(const StudyCliOptions& o) {
         std::vector<double> angles;
         for (double a = 0; a <= 80; a += 10) angles.push_back(a);
         for (double a : {85.0, 88.0, 89.0, 89.5, 89.9, 90.0}) angles.push_back(a);
-        rows = study::tiltSweep(p, angles, o.directions.empty() ? std::vector<std::string>{"z", "axes", "14"} : o.directions);
+        rows = study::tiltSweep(p, angles,
+                                o.directions.empty() ? std::vector<std::string>{"z", "axes", "14"} : o.directions);
     } else if (o.stability == "overlap") {
         if (o.depths.empty()) p.depths = {"24"};
         rows = study::overlapSweep(p, {0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0});
@@ -92,8 +93,8 @@ int runStability(const StudyCliOptions& o) {
     size_t unexplained = 0, detected = 0;
     for (const auto& r : rows) unexplained += r["fp_unexplained"].get<size_t>(), detected += r["detected"].get<int>();
     writeFileAtomically(o.out, study::rowsToCsv(rows));
-    std::printf("%s: %zu trials, %zu without false prunes; unexplained false prunes: %zu; wrote %s\n", o.stability.c_str(),
-                rows.size(), detected, unexplained, o.out.c_str());
+    std::printf("%s: %zu trials, %zu without false prunes; unexplained false prunes: %zu; wrote %s\n",
+                o.stability.c_str(), rows.size(), detected, unexplained, o.out.c_str());
     return unexplained ? 1 : 0;
 }
 
@@ -133,13 +134,14 @@ int runStudyCommand(const StudyCliOptions& o) {
         if (o.quiet) return;
         std::string causes;
         if (!r["false_prunes"].is_null())
-            causes = " false prunes " + r["false_prunes"].dump() + " (depth " + r["fp_depth_rounding"].dump() + ", sampling " +
-                     r["fp_sampling"].dump() + ", edge-on " + r["fp_edge_on"].dump() + ", untested " + r["fp_untested"].dump() +
-                     ", unexplained " + r["fp_unexplained"].dump() + ")";
+            causes = " false prunes " + r["false_prunes"].dump() + " (depth " + r["fp_depth_rounding"].dump() +
+                ", sampling " + r["fp_sampling"].dump() + ", edge-on " + r["fp_edge_on"].dump() + ", untested " +
+                r["fp_untested"].dump() + ", unexplained " + r["fp_unexplained"].dump() + ")";
         std::printf("%s %s %s %s %s: %.1f ms, %s calls, PCS %s of %s;%s\n", r["scene"].get<std::string>().c_str(),
                     r["method"].get<std::string>().c_str(), r["resolution"].get<std::string>().c_str(),
-                    r["depth"].get<std::string>().c_str(), r["directions"].get<std::string>().c_str(), r["time_ms"].get<double>(),
-                    r["calls"].dump().c_str(), r["pcs"].dump().c_str(), r["triangles"].dump().c_str(), causes.c_str());
+                    r["depth"].get<std::string>().c_str(), r["directions"].get<std::string>().c_str(),
+                    r["time_ms"].get<double>(), r["calls"].dump().c_str(), r["pcs"].dump().c_str(),
+                    r["triangles"].dump().c_str(), causes.c_str());
         std::fflush(stdout);
     };
     const size_t done = study::runStudy(so);
@@ -156,8 +158,10 @@ void addStudyCommand(CLI::App& app, Action& action) {
     CLI::App* sub = app.add_subcommand(
         "study", "Sweep configurations over scenes: time, PCS, false prunes by class and cause (docs/studies.md)");
     sub->add_option("spec", o->spec, "Study spec (.json); command-line lists override its fields");
-    sub->add_option("--preset", o->preset, "paper: the seed paper's Section 6 (bunny 5k-270k, two cows 3k-270k, 500x500, D24, modified)");
-    sub->add_option("--scenes", o->scenes, "Scenes: bunny:N, cows:N, twist:N, cylinders:N[:C], or files (FILE@K: frame K)");
+    sub->add_option("--preset", o->preset,
+                    "paper: the seed paper's Section 6 (bunny 5k-270k, two cows 3k-270k, 500x500, D24, modified)");
+    sub->add_option("--scenes", o->scenes,
+                    "Scenes: bunny:N, cows:N, twist:N, cylinders:N[:C], or files (FILE@K: frame K)");
     sub->add_option("--methods", o->methods, "Methods (as prune --method)");
     sub->add_option("--resolutions", o->resolutions, "Viewports: N or WxH");
     sub->add_option("--depths", o->depths, "Depth formats: 8..32 or float");
@@ -166,10 +170,13 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("--leaf-sizes", o->leafSizes, "Hierarchy leaf sizes");
     sub->add_option("--backends", o->backends, "Backends: " + raster::backendNameList());
     sub->add_option("--threads", o->threads, "Worker threads per run (0: all cores)");
-    sub->add_option("--repeats", o->repeats, "Timed runs per configuration (median, min, max)")->check(CLI::Range(1, 1000));
+    sub->add_option("--repeats", o->repeats, "Timed runs per configuration (median, min, max)")
+        ->check(CLI::Range(1, 1000));
     sub->add_flag("--no-oracle", o->noOracle, "Time only: no oracle, no false prunes");
-    sub->add_option("--shard", o->shard, "Run only slice i of N (i/N, 0-based; e.g. $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT)");
-    sub->add_option("-o,--out", o->out, "Output .csv (JSON lines beside it as .jsonl); existing runs are skipped (resume)")
+    sub->add_option("--shard", o->shard,
+                    "Run only slice i of N (i/N, 0-based; e.g. $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT)");
+    sub->add_option("-o,--out", o->out,
+                    "Output .csv (JSON lines beside it as .jsonl); existing runs are skipped (resume)")
         ->capture_default_str();
     sub->add_flag("-q,--quiet", o->quiet, "No per-run lines and no progress bar");
     sub->add_option("--stability", o->stability,

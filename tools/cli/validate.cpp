@@ -41,14 +41,10 @@ void writeQueryPng(const raster::CoverageCapture& c, const OrthoView& view, cons
     for (size_t i = 0; i < c.classes.size(); ++i) {
         const uint8_t k = c.classes[i];
         uint8_t r = 0, g = 0, b = 0;
-        if (k & 1)
-            r = g = b = 255;
-        else if ((k & 2) && (k & 4))
-            g = 200;
-        else if (k & 2)
-            r = g = 220;
-        else if (k & 4)
-            r = 255;
+        if (k & 1) r = g = b = 255;
+        else if ((k & 2) && (k & 4)) g = 200;
+        else if (k & 2) r = g = 220;
+        else if (k & 4) r = 255;
         rgb[3 * i] = r, rgb[3 * i + 1] = g, rgb[3 * i + 2] = b;
     }
     raster::writeRgbPng(view.width, view.height, rgb, path);
@@ -90,10 +86,11 @@ int runValidate(const ValidateOptions& o) {
         const CullideResult ref = runCullide(scene, tee, options);
         const CullideResult oth = runCullide(scene, *gl, options);
         std::vector<PcsTriangle> onlyRef, onlyGl;
-        std::set_difference(ref.pcs.begin(), ref.pcs.end(), oth.pcs.begin(), oth.pcs.end(), std::back_inserter(onlyRef));
+        std::set_difference(ref.pcs.begin(), ref.pcs.end(), oth.pcs.begin(), oth.pcs.end(),
+                            std::back_inserter(onlyRef));
         std::set_difference(oth.pcs.begin(), oth.pcs.end(), ref.pcs.begin(), ref.pcs.end(), std::back_inserter(onlyGl));
-        std::printf("frame %zu: PCS reference %zu, gl %zu triangles; %s (%zu only in the reference, %zu only in gl)\n", f,
-                    ref.pcs.size(), oth.pcs.size(), onlyRef.empty() && onlyGl.empty() ? "identical" : "DIFFERENT",
+        std::printf("frame %zu: PCS reference %zu, gl %zu triangles; %s (%zu only in the reference, %zu only in gl)\n",
+                    f, ref.pcs.size(), oth.pcs.size(), onlyRef.empty() && onlyGl.empty() ? "identical" : "DIFFERENT",
                     onlyRef.size(), onlyGl.size());
         if (!onlyRef.empty() || !onlyGl.empty()) ++pcsDiffering;
     }
@@ -112,9 +109,10 @@ int runValidate(const ValidateOptions& o) {
                 100.0 * double(exact) / n, inside, 100.0 * double(inside) / n, all.size() - inside);
     std::printf("intervals: %zu queries with ambiguous fragments (%.2f%%), mean width %.2f fragments\n", ambiguous,
                 100.0 * double(ambiguous) / n, double(width) / n);
-    std::printf("reference self-check (the interval code's exact track vs the CPU backend): %llu of %llu queries "
-                "differ\n",
-                (unsigned long long)tee.selfCheckMismatches(), (unsigned long long)tee.selfCheckedQueries());
+    std::printf(
+        "reference self-check (the interval code's exact track vs the CPU backend): %llu of %llu queries "
+        "differ\n",
+        (unsigned long long)tee.selfCheckMismatches(), (unsigned long long)tee.selfCheckedQueries());
     std::printf("frames with a different final PCS: %zu of %zu\n", pcsDiffering, last - first);
 
     // The worst queries: outside the interval first (by distance), then by |gl - reference|.
@@ -152,7 +150,8 @@ int runValidate(const ValidateOptions& o) {
             return it == wanted.end() ? -1 : int64_t(it->second);
         };
         size_t written = 0;
-        replay.captured = [&](const raster::QueryComparison& c, const raster::CoverageCapture& cap, const OrthoView& view) {
+        replay.captured = [&](const raster::QueryComparison& c, const raster::CoverageCapture& cap,
+                              const OrthoView& view) {
             char name[96];
             std::snprintf(name, sizeof name, "query_f%u_l%u_q%u.png", c.frame, c.list, c.query);
             writeQueryPng(cap, view, std::filesystem::path(o.png) / name);
@@ -162,9 +161,10 @@ int runValidate(const ValidateOptions& o) {
             replay.setFrame(uint32_t(f));
             runCullide(animation.sceneAt(f), replay, options);
         }
-        std::printf("wrote %zu picture(s) to %s (white: certain, green: ambiguous and passing in the reference, "
-                    "yellow: ambiguous, red: reference outside its own interval)\n",
-                    written, o.png.c_str());
+        std::printf(
+            "wrote %zu picture(s) to %s (white: certain, green: ambiguous and passing in the reference, "
+            "yellow: ambiguous, red: reference outside its own interval)\n",
+            written, o.png.c_str());
     }
     return inside == all.size() ? 0 : 1;
 }
@@ -182,10 +182,12 @@ void addValidateCommand(CLI::App& app, Action& action) {
         ->capture_default_str();
     sub->add_option("--directions", o->cullide.directions, "View directions: 'axes', a count N, or a list")
         ->capture_default_str();
-    sub->add_option("--frame", o->frame, "Validate only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
+    sub->add_option("--frame", o->frame, "Validate only this frame (default: every frame)")
+        ->check(CLI::NonNegativeNumber);
     sub->add_option("--png", o->png, "Write difference pictures of the worst queries' coverage into this folder");
     sub->add_option("--worst", o->worst, "How many worst queries to list")->capture_default_str();
-    sub->add_option("--depth-margin", o->depthLsb, "Constant depth margin of the intervals, in LSB (unorm) or 2^-24 (float)")
+    sub->add_option("--depth-margin", o->depthLsb,
+                    "Constant depth margin of the intervals, in LSB (unorm) or 2^-24 (float)")
         ->check(CLI::Range(0.0, 1e6))
         ->capture_default_str();
     sub->callback([o, &action] { action = [o] { return runValidate(*o); }; });

@@ -77,13 +77,13 @@ std::vector<Vec3d> spreadDirections(uint32_t n);
 
 // One reducePCS call: the data behind the paper's Figures 9-11.
 struct PassStats {
-    uint32_t level = 0;        // hierarchy depth of the PCS nodes' level (0: objects)
-    uint32_t direction = 0;    // index into CullideOptions::directions
+    uint32_t level = 0;  // hierarchy depth of the PCS nodes' level (0: objects)
+    uint32_t direction = 0;  // index into CullideOptions::directions
     size_t nodesIn = 0, nodesOut = 0;
     size_t trianglesIn = 0, trianglesOut = 0;
     size_t trianglesRendered = 0;  // triangles drawn, both passes together
     size_t queries = 0;
-    double seconds = 0;        // wall time of the call, command building and backend included
+    double seconds = 0;  // wall time of the call, command building and backend included
 };
 
 // A PCS entry: a triangle of the scene (scene.h).
@@ -107,9 +107,9 @@ struct CullideOptions {
 struct CullideResult {
     std::vector<PcsTriangle> pcs;  // sorted by (object, triangle)
     std::vector<PassStats> passes;
-    double hierarchySeconds = 0;   // building every object's hierarchy
-    double totalSeconds = 0;       // everything, hierarchy and geometry upload included
-    uint32_t levels = 0;           // hierarchy levels visited
+    double hierarchySeconds = 0;  // building every object's hierarchy
+    double totalSeconds = 0;  // everything, hierarchy and geometry upload included
+    uint32_t levels = 0;  // hierarchy levels visited
 };
 
 // Computes the PCS of `scene` with `backend`. Throws InputError on bad options, and
@@ -127,8 +127,8 @@ struct TriangleRange {
 // everything drawn so far (itself included); reverse, each range from the last is queried with
 // GREATER against the ranges after it, then drawn with LESS. forwardQuery[i] and reverseQuery[i]
 // receive the query numbers of ranges[i] (both spans as long as `ranges`).
-void appendModifiedReducePcs(CommandList& list, std::span<const TriangleRange> ranges,
-                             std::span<uint32_t> forwardQuery, std::span<uint32_t> reverseQuery);
+void appendModifiedReducePcs(CommandList& list, std::span<const TriangleRange> ranges, std::span<uint32_t> forwardQuery,
+                             std::span<uint32_t> reverseQuery);
 
 // Fits the orthographic view of direction `dir` tightly to the triangles in `ranges` (see the
 // conventions above). Near and far are widened by two depth units of `depth` each, so that no

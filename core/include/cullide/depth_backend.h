@@ -64,7 +64,7 @@ constexpr bool depthTest(DepthFunc f, T incoming, T stored) {
 }
 
 enum class QueryKind : uint8_t {
-    SamplesPassed,     // number of fragments that passed the depth test
+    SamplesPassed,  // number of fragments that passed the depth test
     AnySamplesPassed,  // 1 if any fragment passed, else 0
 };
 
@@ -111,17 +111,22 @@ struct OrthoView {
 // One recorded command. Use CommandList's methods to build them.
 struct Command {
     enum class Op : uint8_t {
-        Clear, SetDepthFunc, SetDepthMask, BeginQuery, EndQuery, Draw,
-        ClearIntervals,     // conservative mode: empty every pixel's interval
-        DrawConservative,   // conservative mode: triangles [first, first+count) with test/write below
+        Clear,
+        SetDepthFunc,
+        SetDepthMask,
+        BeginQuery,
+        EndQuery,
+        Draw,
+        ClearIntervals,  // conservative mode: empty every pixel's interval
+        DrawConservative,  // conservative mode: triangles [first, first+count) with test/write below
     };
     Op op;
-    DepthFunc func = DepthFunc::Less;          // SetDepthFunc
+    DepthFunc func = DepthFunc::Less;  // SetDepthFunc
     QueryKind queryKind = QueryKind::SamplesPassed;  // BeginQuery
-    bool mask = true;                          // SetDepthMask
-    double clearDepth = 1.0;                   // Clear: window-space depth in [0,1]
-    uint32_t first = 0, count = 0;             // Draw, DrawConservative: triangles [first, first+count)
-    bool test = false, write = false;          // DrawConservative: count conflicts / merge intervals
+    bool mask = true;  // SetDepthMask
+    double clearDepth = 1.0;  // Clear: window-space depth in [0,1]
+    uint32_t first = 0, count = 0;  // Draw, DrawConservative: triangles [first, first+count)
+    bool test = false, write = false;  // DrawConservative: count conflicts / merge intervals
 };
 
 // A command list: what one reducePCS pass (or any depth-only workload) asks a backend to do.

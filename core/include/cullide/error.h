@@ -27,7 +27,7 @@ private:
 
 }  // namespace cullide
 
-#define CULLIDE_CHECK(cond, msg)                                                   \
-    do {                                                                           \
-        if (!(cond)) ::cullide::checkFailed(#cond, __FILE__, __LINE__, (msg));     \
+#define CULLIDE_CHECK(cond, msg)                                               \
+    do {                                                                       \
+        if (!(cond)) ::cullide::checkFailed(#cond, __FILE__, __LINE__, (msg)); \
     } while (0)

@@ -42,9 +42,9 @@ Mesh decimate(const Mesh& mesh, size_t targetTriangles);
 Mesh resample(const Mesh& mesh, size_t targetTriangles);
 
 struct SceneRequest {
-    size_t triangles = 5000;   // requested total triangle count (about)
+    size_t triangles = 5000;  // requested total triangle count (about)
     uint64_t seed = 1;
-    size_t frames = 0;         // 0: a still scene; else an animation of this many frames
+    size_t frames = 0;  // 0: a still scene; else an animation of this many frames
 };
 
 // A deformed Stanford bunny with a single self-intersection area (one object, "bunny"): the input

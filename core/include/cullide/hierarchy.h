@@ -40,13 +40,13 @@ struct HierarchyOptions {
     HierarchyKind kind = HierarchyKind::Connectivity;
     uint32_t leafSize = 16;  // a node with at most this many triangles is a leaf (>= 1)
     uint32_t branching = 4;  // children per split (>= 2)
-    uint64_t seed = 1;       // used by Random
+    uint64_t seed = 1;  // used by Random
 };
 
 struct HierarchyNode {
-    uint32_t first = 0, count = 0;            // range in Hierarchy::order
+    uint32_t first = 0, count = 0;  // range in Hierarchy::order
     uint32_t firstChild = 0, childCount = 0;  // range in Hierarchy::nodes
-    uint32_t depth = 0;                       // root: 0
+    uint32_t depth = 0;  // root: 0
     bool isLeaf() const { return childCount == 0; }
 };
 

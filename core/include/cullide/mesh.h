@@ -45,8 +45,14 @@ struct Bounds {
     Vec3f lo = Vec3f::Constant(std::numeric_limits<float>::infinity());
     Vec3f hi = Vec3f::Constant(-std::numeric_limits<float>::infinity());
 
-    void add(const Vec3f& p) { lo = lo.cwiseMin(p); hi = hi.cwiseMax(p); }
-    void add(const Bounds& b) { lo = lo.cwiseMin(b.lo); hi = hi.cwiseMax(b.hi); }
+    void add(const Vec3f& p) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+    }
+    void add(const Bounds& b) {
+        lo = lo.cwiseMin(b.lo);
+        hi = hi.cwiseMax(b.hi);
+    }
     bool empty() const { return !(lo.x() <= hi.x()); }
     Vec3f extent() const { return empty() ? Vec3f::Zero() : Vec3f(hi - lo); }
 };

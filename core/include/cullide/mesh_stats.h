@@ -12,7 +12,7 @@ struct MeshStats {
     size_t vertices = 0;
     size_t triangles = 0;
     size_t unreferencedVertices = 0;
-    Bounds bounds;                  // of the referenced vertices
+    Bounds bounds;  // of the referenced vertices
     // Degenerate triangles, decided exactly (no epsilon): repeated index, two corners at the same
     // point, or three collinear corners (the exact predicate `collinear` of cullide/predicates.h).
     size_t degenerateTriangles = 0;

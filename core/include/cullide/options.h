@@ -27,11 +27,11 @@ inline constexpr uint32_t kMinBranching = 2, kMaxBranching = 64;
 
 // CullideOptions as typed; the defaults give CullideOptions' defaults.
 struct OptionText {
-    std::string method = "modified";        // original | modified | reliable
-    std::string resolution = "500";         // N or WxH, each side 1..kMaxViewportSide
-    std::string depth = "24";               // unorm bits 8..32 (24, d24, unorm24) or float (float, f32, d32f)
-    std::string directions = "axes";        // axes | N (spread) | a list x,-y,z or '1 0 0;0 1 1'
-    std::string hierarchy = "connectivity"; // connectivity | random
+    std::string method = "modified";  // original | modified | reliable
+    std::string resolution = "500";  // N or WxH, each side 1..kMaxViewportSide
+    std::string depth = "24";  // unorm bits 8..32 (24, d24, unorm24) or float (float, f32, d32f)
+    std::string directions = "axes";  // axes | N (spread) | a list x,-y,z or '1 0 0;0 1 1'
+    std::string hierarchy = "connectivity";  // connectivity | random
     uint32_t leafSize = 16;
     uint32_t branching = 4;
     uint64_t seed = 1;  // of the random hierarchy

@@ -98,10 +98,14 @@ inline int32_t integerUnit(const float* coordinates, size_t count) {
 }
 
 // 2^-unit, the scale that takes coordinates to integers of 2^unit (unit from integerUnit).
-inline double unitScale(int32_t unit) { return std::bit_cast<double>(uint64_t(1023 - unit) << 52); }
+inline double unitScale(int32_t unit) {
+    return std::bit_cast<double>(uint64_t(1023 - unit) << 52);
+}
 
 // x (a float) in integers of 2^unit, given scale = unitScale(unit): exact (a power-of-two
 // scaling to an integer below 2^62).
-inline int64_t toUnit(float x, double scale) { return int64_t(double(x) * scale); }
+inline int64_t toUnit(float x, double scale) {
+    return int64_t(double(x) * scale);
+}
 
 }  // namespace cullide

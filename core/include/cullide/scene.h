@@ -66,8 +66,8 @@ FlatScene flatten(const Scene& scene);
 
 // What one frame of an animation changes for one object.
 struct ObjectPose {
-    std::optional<Transform> transform;          // replaces the object's transform
-    std::optional<std::vector<Vec3f>> positions; // replaces its model-space positions (same count)
+    std::optional<Transform> transform;  // replaces the object's transform
+    std::optional<std::vector<Vec3f>> positions;  // replaces its model-space positions (same count)
 };
 
 struct Frame {
@@ -75,7 +75,7 @@ struct Frame {
 };
 
 struct Animation {
-    Scene scene;                // the base scene (frame-independent data: names, triangles)
+    Scene scene;  // the base scene (frame-independent data: names, triangles)
     std::vector<Frame> frames;  // may be empty: a still scene
 
     size_t frameCount() const { return frames.empty() ? 1 : frames.size(); }

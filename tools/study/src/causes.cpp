@@ -46,7 +46,9 @@ Plane planeOf(const Vec3d w[3]) {
 }
 
 // Stored value as a signed integer that orders like the depth (unorm k, or float bits).
-int64_t storedOrder(uint32_t v) { return int64_t(v); }
+int64_t storedOrder(uint32_t v) {
+    return int64_t(v);
+}
 
 }  // namespace
 
@@ -145,7 +147,9 @@ int rank(Cause c) {
     }
     return 0;
 }
-Cause worst(Cause a, Cause b) { return rank(a) <= rank(b) ? a : b; }
+Cause worst(Cause a, Cause b) {
+    return rank(a) <= rank(b) ? a : b;
+}
 
 constexpr uint32_t kNever = std::numeric_limits<uint32_t>::max();
 
@@ -159,7 +163,8 @@ Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth,
     auto global = [&](uint32_t object, uint32_t triangle) { return world.triangle(object, triangle); };
 
     std::vector<char> colliding(total, 0);
-    for (const oracle::IntersectingPair& p : truth.pairs) colliding[global(p.objectA, p.triangleA)] = colliding[global(p.objectB, p.triangleB)] = 1;
+    for (const oracle::IntersectingPair& p : truth.pairs)
+        colliding[global(p.objectA, p.triangleA)] = colliding[global(p.objectB, p.triangleB)] = 1;
 
     std::vector<uint32_t> prunedAt(total, kNever);
     std::vector<char> inPcs(total, 1), next(total, 0);

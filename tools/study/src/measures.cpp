@@ -39,7 +39,8 @@ struct DepthPlane {
 bool holdsPixelCentre(const std::vector<P2>& poly, int width, int height) {
     double ylo = std::numeric_limits<double>::infinity(), yhi = -ylo;
     for (const P2& p : poly) ylo = std::min(ylo, p.y), yhi = std::max(yhi, p.y);
-    const long j0 = std::max(0L, long(std::ceil(ylo - 0.5))), j1 = std::min(long(height) - 1, long(std::floor(yhi - 0.5)));
+    const long j0 = std::max(0L, long(std::ceil(ylo - 0.5))),
+               j1 = std::min(long(height) - 1, long(std::floor(yhi - 0.5)));
     for (long j = j0; j <= j1; ++j) {
         const double yc = double(j) + 0.5;
         double xl = std::numeric_limits<double>::infinity(), xr = -xl;
@@ -57,7 +58,8 @@ bool holdsPixelCentre(const std::vector<P2>& poly, int width, int height) {
             }
         }
         if (!(xl <= xr)) continue;
-        const long i0 = std::max(0L, long(std::ceil(xl - 0.5))), i1 = std::min(long(width) - 1, long(std::floor(xr - 0.5)));
+        const long i0 = std::max(0L, long(std::ceil(xl - 0.5))),
+                   i1 = std::min(long(width) - 1, long(std::floor(xr - 0.5)));
         if (i0 <= i1) return true;
     }
     return false;
@@ -125,8 +127,9 @@ PcsReport measurePcs(const Scene& scene, const Truth& truth, std::span<const Pcs
     }
     for (const PcsTriangle& p : pcs) {
         if (p.object >= objects || p.triangle >= inPcs[p.object].size())
-            throw InputError("pcs", "entry (" + std::to_string(p.object) + ", " + std::to_string(p.triangle) +
-                                        ") names no triangle of the scene");
+            throw InputError("pcs",
+                             "entry (" + std::to_string(p.object) + ", " + std::to_string(p.triangle) +
+                                 ") names no triangle of the scene");
         if (!inPcs[p.object][p.triangle]) ++r.pcsTriangles;
         inPcs[p.object][p.triangle] = 1;
     }

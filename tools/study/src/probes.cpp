@@ -35,8 +35,10 @@ Object makeObject(const std::string& name, std::vector<Vec3f> positions, std::ve
 
 // The anchor (probes.h): its projection along +z is the segment y = y0, x in [-x0, x0].
 Object anchor(double x0, double y0) {
-    return makeObject("anchor", {Vec3f(float(-x0), float(y0), -1.f), Vec3f(float(x0), float(y0), 1.f), Vec3f(float(-x0), float(y0), 1.f)},
-                      {{0, 1, 2}});
+    return makeObject(
+        "anchor",
+        {Vec3f(float(-x0), float(y0), -1.f), Vec3f(float(x0), float(y0), 1.f), Vec3f(float(-x0), float(y0), 1.f)},
+        {{0, 1, 2}});
 }
 
 // The view runCullide fits for its first call in direction `dir` (every triangle of the scene).
@@ -104,7 +106,8 @@ std::vector<nlohmann::ordered_json> penetrationSweep(const ProbeOptions& po, con
             const OrthoView v0 = firstView(frame, Vec3d(0, 0, 1), o);
             const double range = v0.zfar - v0.znear;
             const double step = range * o.depth.resolution();
-            const double paperUnit = o.depth.kind == DepthFormat::Kind::Unorm ? range * std::ldexp(1.0, -o.depth.bits) : step;
+            const double paperUnit =
+                o.depth.kind == DepthFormat::Kind::Unorm ? range * std::ldexp(1.0, -o.depth.bits) : step;
             for (double f : factors)
                 for (int trial = 0; trial < po.trials; ++trial) {
                     const double delta = f * paperUnit;
@@ -112,13 +115,16 @@ std::vector<nlohmann::ordered_json> penetrationSweep(const ProbeOptions& po, con
                     const double psi = rng.uniform(0, 2 * std::numbers::pi);
                     const Vec3d off(rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05), phase);
                     Scene s;
-                    s.objects.push_back(makeObject(
-                        "a", {rotZ({-0.6, -0.6, 0}, psi, off), rotZ({0.6, -0.6, 0}, psi, off), rotZ({0.6, 0.6, 0}, psi, off), rotZ({-0.6, 0.6, 0}, psi, off)},
-                        {{0, 1, 2}, {0, 2, 3}}));
+                    s.objects.push_back(makeObject("a",
+                                                   {rotZ({-0.6, -0.6, 0}, psi, off), rotZ({0.6, -0.6, 0}, psi, off),
+                                                    rotZ({0.6, 0.6, 0}, psi, off), rotZ({-0.6, 0.6, 0}, psi, off)},
+                                                   {{0, 1, 2}, {0, 2, 3}}));
                     // B: its lower edge delta behind A, rising 4 steps in front of A at its apex.
-                    s.objects.push_back(makeObject(
-                        "b", {rotZ({-0.5, -0.5, delta}, psi, off), rotZ({0.5, -0.5, delta}, psi, off), rotZ({0.05, 0.55, -4 * step}, psi, off)},
-                        {{0, 1, 2}}));
+                    s.objects.push_back(
+                        makeObject("b",
+                                   {rotZ({-0.5, -0.5, delta}, psi, off), rotZ({0.5, -0.5, delta}, psi, off),
+                                    rotZ({0.05, 0.55, -4 * step}, psi, off)},
+                                   {{0, 1, 2}}));
                     s.objects.push_back(anchor(0.95, -0.95));
                     const Trial t = evaluate(s, o, *backend);
                     // The deepest penetration of B behind A that the samples can see.
@@ -127,7 +133,8 @@ std::vector<nlohmann::ordered_json> penetrationSweep(const ProbeOptions& po, con
                     const std::array<Vec3f, 3> tb{b.positions[0], b.positions[1], b.positions[2]};
                     double sampled = -std::numeric_limits<double>::infinity();
                     for (const Triangle& ta : a.triangles) {
-                        const PairSample ps = samplePair(*backend, tb, {a.positions[ta[0]], a.positions[ta[1]], a.positions[ta[2]]}, view);
+                        const PairSample ps = samplePair(
+                            *backend, tb, {a.positions[ta[0]], a.positions[ta[1]], a.positions[ta[2]]}, view);
                         if (ps.shared) sampled = std::max(sampled, ps.maxDiffSteps);
                     }
                     nlohmann::ordered_json row;
@@ -138,7 +145,8 @@ std::vector<nlohmann::ordered_json> penetrationSweep(const ProbeOptions& po, con
                     row["factor"] = f;
                     row["trial"] = trial;
                     row["delta_steps"] = delta / step;
-                    row["sampled_steps"] = std::isfinite(sampled) ? nlohmann::ordered_json(sampled) : nlohmann::ordered_json();
+                    row["sampled_steps"] =
+                        std::isfinite(sampled) ? nlohmann::ordered_json(sampled) : nlohmann::ordered_json();
                     putTrial(row, t);
                     rows.push_back(row);
                 }
@@ -162,10 +170,14 @@ std::vector<nlohmann::ordered_json> tiltSweep(const ProbeOptions& po, const std:
                     const Vec3d tb(std::cos(th), 0, -std::sin(th)), ta(std::cos(tha), 0, -std::sin(tha)), y(0, 1, 0);
                     const double psi = rng.uniform(0, 2 * std::numbers::pi);
                     const Vec3d off(rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05));
-                    auto at = [&](const Vec3d& across, double along, double t) { return rotZ(along * y + t * across, psi, off); };
+                    auto at = [&](const Vec3d& across, double along, double t) {
+                        return rotZ(along * y + t * across, psi, off);
+                    };
                     Scene s;
-                    s.objects.push_back(makeObject("a", {at(ta, -0.45, -0.4), at(ta, 0.55, -0.4), at(ta, 0.05, 0.6)}, {{0, 1, 2}}));
-                    s.objects.push_back(makeObject("b", {at(tb, -0.5, -0.4), at(tb, 0.5, -0.4), at(tb, 0.0, 0.6)}, {{0, 1, 2}}));
+                    s.objects.push_back(
+                        makeObject("a", {at(ta, -0.45, -0.4), at(ta, 0.55, -0.4), at(ta, 0.05, 0.6)}, {{0, 1, 2}}));
+                    s.objects.push_back(
+                        makeObject("b", {at(tb, -0.5, -0.4), at(tb, 0.5, -0.4), at(tb, 0.0, 0.6)}, {{0, 1, 2}}));
                     const Trial t = evaluate(s, o, *backend);
                     nlohmann::ordered_json row;
                     row["sweep"] = "tilt";
@@ -189,19 +201,22 @@ std::vector<nlohmann::ordered_json> overlapSweep(const ProbeOptions& po, const s
             Rng rng(po.seed);
             const CullideOptions o = probeOptions(method, depth, po.resolution, "z");
             Scene base;
-            base.objects.push_back(makeObject("a", {{-0.6f, -0.6f, 0.f}, {0.6f, -0.6f, 0.f}, {0.6f, 0.6f, 0.f}, {-0.6f, 0.6f, 0.f}},
-                                              {{0, 1, 2}, {0, 2, 3}}));
+            base.objects.push_back(
+                makeObject("a", {{-0.6f, -0.6f, 0.f}, {0.6f, -0.6f, 0.f}, {0.6f, 0.6f, 0.f}, {-0.6f, 0.6f, 0.f}},
+                           {{0, 1, 2}, {0, 2, 3}}));
             base.objects.push_back(anchor(0.6, -0.7));
             const OrthoView v0 = firstView(base, Vec3d(0, 0, 1), o);
             const double pixel = (v0.xmax - v0.xmin) / o.width;
             for (double size : sizes)
                 for (int trial = 0; trial < po.trials; ++trial) {
                     const double r = 0.5 * size * pixel * std::numbers::sqrt2, big = 2 * r;  // in- and circumradius
-                    const double cx = rng.uniform(-0.3, 0.3), cy = rng.uniform(-0.3, 0.3), alpha = rng.uniform(0, 2 * std::numbers::pi);
+                    const double cx = rng.uniform(-0.3, 0.3), cy = rng.uniform(-0.3, 0.3),
+                                 alpha = rng.uniform(0, 2 * std::numbers::pi);
                     std::vector<Vec3f> bp;
                     for (int k = 0; k < 3; ++k) {
                         const double a = alpha + 2 * std::numbers::pi * k / 3;
-                        bp.push_back(Vec3f(float(cx + big * std::cos(a)), float(cy + big * std::sin(a)), k == 0 ? 0.05f : -0.05f));
+                        bp.push_back(Vec3f(float(cx + big * std::cos(a)), float(cy + big * std::sin(a)),
+                                           k == 0 ? 0.05f : -0.05f));
                     }
                     Scene s = base;
                     s.objects.push_back(makeObject("b", bp, {{0, 1, 2}}));
@@ -233,7 +248,8 @@ std::vector<nlohmann::ordered_json> jitterSweep(const ProbeOptions& po, const st
         const double diagonal = double(box.extent().norm());
         for (const std::string& method : po.methods) {
             Rng rng(po.seed);
-            const CullideOptions o = probeOptions(method, po.depths.empty() ? "24" : po.depths.front(), po.resolution, "axes");
+            const CullideOptions o =
+                probeOptions(method, po.depths.empty() ? "24" : po.depths.front(), po.resolution, "axes");
             auto record = [&](const Scene& s, const char* kind, double magnitude, int trial) {
                 const Trial t = evaluate(s, o, *backend);
                 nlohmann::ordered_json row;

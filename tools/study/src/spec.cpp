@@ -113,7 +113,8 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
         } else if (key == "depths") {
             s.depths = r.texts(v, key, DepthFormat::parse, 8, 32);
         } else if (key == "directions") {
-            s.directions = r.texts(v, key, [](const std::string& t) { return parseDirections(t); }, 1, 10000);
+            s.directions = r.texts(
+                v, key, [](const std::string& t) { return parseDirections(t); }, 1, 10000);
         } else if (key == "hierarchies") {
             s.hierarchies = r.texts(v, key, parseHierarchyKind);
         } else if (key == "leaf_sizes") {
@@ -137,9 +138,11 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
             if (!v.is_boolean()) r.fail(key, "true or false, not " + v.dump());
             s.oracle = v.get<bool>();
         } else {
-            throw InputError(source, "unknown field '" + key + "' (fields: scenes, methods, resolutions, depths, "
-                                     "directions, hierarchies, leaf_sizes, backends, threads, branching, seed, "
-                                     "repeats, oracle)");
+            throw InputError(source,
+                             "unknown field '" + key +
+                                 "' (fields: scenes, methods, resolutions, depths, "
+                                 "directions, hierarchies, leaf_sizes, backends, threads, branching, seed, "
+                                 "repeats, oracle)");
         }
     }
     return s;

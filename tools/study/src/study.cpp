@@ -29,9 +29,13 @@ namespace cullide::study {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double secondsSince(Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
-std::string dataDir() { return CULLIDE_DATA_DIR; }
+std::string dataDir() {
+    return CULLIDE_DATA_DIR;
+}
 
 // "name:a:b" split at ':' (a Windows drive letter is not a concern here).
 std::vector<std::string> splitColon(const std::string& s) {
@@ -102,8 +106,8 @@ OptionNames specOptionNames(const std::string& source) {
 Spec paperPreset(int repeats) {
     Spec s;
     // Five sizes per scene over the paper's ranges (bunny 5k-270k, cows 3k-270k).
-    s.scenes = {"bunny:5000",  "bunny:20000", "bunny:70000", "bunny:150000", "bunny:270000",
-                "cows:3000",   "cows:20000",  "cows:70000",  "cows:150000",  "cows:270000"};
+    s.scenes = {"bunny:5000", "bunny:20000", "bunny:70000", "bunny:150000", "bunny:270000",
+                "cows:3000",  "cows:20000",  "cows:70000",  "cows:150000",  "cows:270000"};
     s.methods = {"modified"};
     s.resolutions = {"500"};
     s.depths = {"24"};
@@ -144,8 +148,8 @@ Scene loadStudyScene(const std::string& text, uint32_t frame) {
     }
     const Animation a = loadScene(splitFrame(text).first);
     if (frame >= a.frameCount())
-        throw InputError("scene '" + text + "'", "has " + std::to_string(a.frameCount()) + " frame(s), no frame " +
-                                                     std::to_string(frame));
+        throw InputError("scene '" + text + "'",
+                         "has " + std::to_string(a.frameCount()) + " frame(s), no frame " + std::to_string(frame));
     return a.sceneAt(frame);
 }
 
@@ -176,7 +180,8 @@ std::vector<RunConfig> expand(const Spec& spec) {
             } else {
                 if (sel.find_first_not_of("0123456789") != std::string::npos || sel.size() > 9 ||
                     std::stoul(sel) >= count)
-                    throw InputError("scene '" + scene + "'", "frame '" + sel + "': the file has " + std::to_string(count) + " frame(s)");
+                    throw InputError("scene '" + scene + "'",
+                                     "frame '" + sel + "': the file has " + std::to_string(count) + " frame(s)");
                 frames = {uint32_t(std::stoul(sel))};
             }
         }
@@ -226,10 +231,14 @@ CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names) {
 }
 
 nlohmann::ordered_json passJson(const PassStats& p) {
-    return {{"level", p.level},           {"direction", p.direction},
-            {"nodes_in", p.nodesIn},      {"nodes_out", p.nodesOut},
-            {"triangles_in", p.trianglesIn}, {"triangles_out", p.trianglesOut},
-            {"triangles_rendered", p.trianglesRendered}, {"queries", p.queries},
+    return {{"level", p.level},
+            {"direction", p.direction},
+            {"nodes_in", p.nodesIn},
+            {"nodes_out", p.nodesOut},
+            {"triangles_in", p.trianglesIn},
+            {"triangles_out", p.trianglesOut},
+            {"triangles_rendered", p.trianglesRendered},
+            {"queries", p.queries},
             {"seconds", p.seconds}};
 }
 
@@ -280,11 +289,11 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     j["triangles_rendered"] = rendered;
     j["queries"] = queries;
     j["pcs"] = r.pcs.size();
-    for (const char* k : {"oracle_pairs", "oracle_crossing", "oracle_touching", "colliding", "false_prunes",
-                          "fp_crossing", "fp_touching", "fp_depth_rounding", "fp_sampling", "fp_edge_on",
-                          "fp_untested", "fp_unexplained", "missed_pairs", "mp_crossing", "mp_touching",
-                          "mp_depth_rounding", "mp_sampling", "mp_edge_on", "mp_untested", "mp_unexplained",
-                          "false_positives", "efficiency", "attribution_ms"})
+    for (const char* k : {"oracle_pairs",      "oracle_crossing", "oracle_touching",   "colliding",   "false_prunes",
+                          "fp_crossing",       "fp_touching",     "fp_depth_rounding", "fp_sampling", "fp_edge_on",
+                          "fp_untested",       "fp_unexplained",  "missed_pairs",      "mp_crossing", "mp_touching",
+                          "mp_depth_rounding", "mp_sampling",     "mp_edge_on",        "mp_untested", "mp_unexplained",
+                          "false_positives",   "efficiency",      "attribution_ms"})
         j[k] = nullptr;
     if (truth) {
         const PcsReport rep = measurePcs(scene, *truth, r.pcs, options);
@@ -297,7 +306,8 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
         const bool same = a.result.pcs == r.pcs;
         const size_t missed = rep.missedPairs[0] + rep.missedPairs[1];
         size_t attributedPairs = 0, attributedTriangles = 0;
-        for (int k = 0; k < kCauseCount; ++k) attributedPairs += a.pairs[size_t(k)], attributedTriangles += a.triangles[size_t(k)];
+        for (int k = 0; k < kCauseCount; ++k)
+            attributedPairs += a.pairs[size_t(k)], attributedTriangles += a.triangles[size_t(k)];
         if (!same || attributedPairs != missed || attributedTriangles != rep.falsePruneCount()) {
             a.pairs = {}, a.triangles = {};
             a.pairs[size_t(Cause::Unexplained)] = missed;
@@ -328,18 +338,37 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
 }
 
 const std::vector<std::string>& columns() {
-    static const std::vector<std::string> c = {
-        "index", "id", "scene", "frame", "triangles", "objects", "method", "resolution", "depth", "directions",
-        "direction_count", "hierarchy", "leaf_size", "branching", "backend", "threads", "repeats", "time_ms",
-        "time_min_ms", "time_max_ms", "hierarchy_ms", "calls", "levels", "triangles_rendered", "queries", "pcs",
-        "oracle_pairs", "oracle_crossing", "oracle_touching", "colliding", "false_prunes", "fp_crossing",
-        "fp_touching", "fp_depth_rounding", "fp_sampling", "fp_edge_on", "fp_untested", "fp_unexplained",
-        "missed_pairs", "mp_crossing", "mp_touching", "mp_depth_rounding", "mp_sampling", "mp_edge_on",
-        "mp_untested", "mp_unexplained", "false_positives", "efficiency", "attribution_ms"};
+    static const std::vector<std::string> c = {"index",           "id",
+                                               "scene",           "frame",
+                                               "triangles",       "objects",
+                                               "method",          "resolution",
+                                               "depth",           "directions",
+                                               "direction_count", "hierarchy",
+                                               "leaf_size",       "branching",
+                                               "backend",         "threads",
+                                               "repeats",         "time_ms",
+                                               "time_min_ms",     "time_max_ms",
+                                               "hierarchy_ms",    "calls",
+                                               "levels",          "triangles_rendered",
+                                               "queries",         "pcs",
+                                               "oracle_pairs",    "oracle_crossing",
+                                               "oracle_touching", "colliding",
+                                               "false_prunes",    "fp_crossing",
+                                               "fp_touching",     "fp_depth_rounding",
+                                               "fp_sampling",     "fp_edge_on",
+                                               "fp_untested",     "fp_unexplained",
+                                               "missed_pairs",    "mp_crossing",
+                                               "mp_touching",     "mp_depth_rounding",
+                                               "mp_sampling",     "mp_edge_on",
+                                               "mp_untested",     "mp_unexplained",
+                                               "false_positives", "efficiency",
+                                               "attribution_ms"};
     return c;
 }
 
-bool isTimingColumn(const std::string& name) { return name.size() > 3 && name.compare(name.size() - 3, 3, "_ms") == 0; }
+bool isTimingColumn(const std::string& name) {
+    return name.size() > 3 && name.compare(name.size() - 3, 3, "_ms") == 0;
+}
 
 std::string csvHeader() {
     std::string s;
@@ -379,8 +408,7 @@ std::vector<nlohmann::ordered_json> readRecords(const std::filesystem::path& pat
         try {
             nlohmann::ordered_json j = nlohmann::ordered_json::parse(line);
             if (j.is_object() && j.contains("id")) out.push_back(std::move(j));
-        } catch (const nlohmann::json::exception&) {
-        }
+        } catch (const nlohmann::json::exception&) {}
     }
     return out;
 }
@@ -447,9 +475,9 @@ size_t runStudy(const StudyOptions& opt) {
             const double elapsed = secondsSince(start);
             const double eta = elapsed / double(i + 1) * double(todo.size() - i - 1);
             const int width = 30, filled = int(double(width) * double(i + 1) / double(todo.size()));
-            std::fprintf(stderr, "\rstudy [%s%s] %zu/%zu runs, %s elapsed, ETA %s   ", std::string(size_t(filled), '#').c_str(),
-                         std::string(size_t(width - filled), '.').c_str(), i + 1, todo.size(), duration(elapsed).c_str(),
-                         duration(eta).c_str());
+            std::fprintf(stderr, "\rstudy [%s%s] %zu/%zu runs, %s elapsed, ETA %s   ",
+                         std::string(size_t(filled), '#').c_str(), std::string(size_t(width - filled), '.').c_str(),
+                         i + 1, todo.size(), duration(elapsed).c_str(), duration(eta).c_str());
             if (i + 1 == todo.size()) std::fprintf(stderr, "\n");
         }
     }

@@ -80,14 +80,14 @@ struct OracleOptions {
 };
 
 struct Truth {
-    std::vector<IntersectingPair> pairs;   // sorted, each unordered pair once
-    std::vector<TriangleRef> degenerate;   // sorted; in no pair
-    size_t trianglesTested = 0;            // non-degenerate triangles given to the broad phase
-    size_t candidatePairs = 0;             // broad-phase pairs given to the narrow phase
-    double setupSeconds = 0;               // validation, world positions, degeneracy, boxes
-    double buildSeconds = 0;               // broad phase: building the grid
-    double collideSeconds = 0;             // pair tests in the cells, narrow phase inside
-    double sortSeconds = 0;                // merging the per-thread results
+    std::vector<IntersectingPair> pairs;  // sorted, each unordered pair once
+    std::vector<TriangleRef> degenerate;  // sorted; in no pair
+    size_t trianglesTested = 0;  // non-degenerate triangles given to the broad phase
+    size_t candidatePairs = 0;  // broad-phase pairs given to the narrow phase
+    double setupSeconds = 0;  // validation, world positions, degeneracy, boxes
+    double buildSeconds = 0;  // broad phase: building the grid
+    double collideSeconds = 0;  // pair tests in the cells, narrow phase inside
+    double sortSeconds = 0;  // merging the per-thread results
     double totalSeconds = 0;
 
     size_t count(PairClass c) const;

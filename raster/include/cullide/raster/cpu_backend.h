@@ -31,26 +31,26 @@
 namespace cullide::raster {
 
 struct CpuBackendOptions {
-    int subpixelBits = kDefaultSubpixelBits;   // S, kMinSubpixelBits..kMaxSubpixelBits
+    int subpixelBits = kDefaultSubpixelBits;  // S, kMinSubpixelBits..kMaxSubpixelBits
     FillRule fillRule = FillRule::BottomLeft;
-    int threads = 0;                           // 0: oneTBB's default; else a task_arena of this size
-    int tileSize = kDefaultTileSize;           // fast path tile edge in pixels, 8..1024
-    bool scalarReference = false;              // use the scalar reference path instead
-    bool simd = true;                          // fast path: AVX2 pixel loop where the CPU has it
-                                               // (the same results bit for bit; false: scalar)
+    int threads = 0;  // 0: oneTBB's default; else a task_arena of this size
+    int tileSize = kDefaultTileSize;  // fast path tile edge in pixels, 8..1024
+    bool scalarReference = false;  // use the scalar reference path instead
+    bool simd = true;  // fast path: AVX2 pixel loop where the CPU has it
+                       // (the same results bit for bit; false: scalar)
 };
 
 // What the last execute() did, counted per drawn triangle instance (a triangle drawn twice counts
 // twice). Identical for the fast and the reference path and for any thread count.
 struct RasterStats {
-    uint64_t draws = 0;             // draw commands
-    uint64_t triangles = 0;         // triangles submitted by draws
-    uint64_t rejected = 0;          // entirely outside the viewport or the depth range
-    uint64_t clipped = 0;           // crossing the depth range or the guard band (clipped, then drawn)
-    uint64_t zeroArea = 0;          // not rejected, but every snapped (sub-)triangle has zero area:
-                                    // edge-on in this view, produce no fragment (paper Section 5)
-    uint64_t fragments = 0;         // covered pixel centres (fragments reaching the depth test)
-    uint64_t passed = 0;            // fragments that passed the depth test
+    uint64_t draws = 0;  // draw commands
+    uint64_t triangles = 0;  // triangles submitted by draws
+    uint64_t rejected = 0;  // entirely outside the viewport or the depth range
+    uint64_t clipped = 0;  // crossing the depth range or the guard band (clipped, then drawn)
+    uint64_t zeroArea = 0;  // not rejected, but every snapped (sub-)triangle has zero area:
+                            // edge-on in this view, produce no fragment (paper Section 5)
+    uint64_t fragments = 0;  // covered pixel centres (fragments reaching the depth test)
+    uint64_t passed = 0;  // fragments that passed the depth test
     friend bool operator==(const RasterStats&, const RasterStats&) = default;
 };
 

@@ -16,8 +16,8 @@
 //   - Window coordinates: the vertex shader evaluates OrthoView::toWindow() in double, in the same
 //     order of operations (GLSL `precise`), and rounds the result to float. With
 //     glClipControl(LOWER_LEFT, ZERO_TO_ONE) and a viewport of (-P, -P, 2P, 2P) (P a power of two
-//     >= twice the larger side where GL_MAX_VIEWPORT_DIMS allows, else >= it) GL's viewport transform is then exact, so the rasterizer sees exactly
-//     float(toWindow(p)); the reference sees toWindow(p) in double. (When 2P would exceed
+//     >= twice the larger side where GL_MAX_VIEWPORT_DIMS allows, else >= it) GL's viewport transform is then exact, so
+//     the rasterizer sees exactly float(toWindow(p)); the reference sees toWindow(p) in double. (When 2P would exceed
 //     GL_MAX_VIEWPORT_DIMS the ordinary viewport is used and the transform rounds in float.)
 //   - Same commands, one to one: Clear -> glClearDepth + glClear (depth writes enabled for the
 //     clear, as the reference clears regardless of the mask), SetDepthFunc -> glDepthFunc,
@@ -49,8 +49,8 @@ public:
 
 struct GlBackendOptions {
     enum class Platform : uint8_t {
-        Auto,         // hardware EGL devices, then Mesa surfaceless, then software devices
-        Device,       // EGL devices only (EGL_EXT_platform_device)
+        Auto,  // hardware EGL devices, then Mesa surfaceless, then software devices
+        Device,  // EGL devices only (EGL_EXT_platform_device)
         Surfaceless,  // Mesa's surfaceless platform only (EGL_MESA_platform_surfaceless)
     };
     Platform platform = Platform::Auto;
@@ -66,9 +66,9 @@ struct GlBackendOptions {
 struct GlInfo {
     std::string platform;  // "EGL device 0 (software)", "Mesa surfaceless"
     std::string renderer, version, vendor;
-    int subpixelBits = 0;       // GL_SUBPIXEL_BITS
-    int maxViewport = 0;        // GL_MAX_VIEWPORT_DIMS (smaller side)
-    bool hasUnorm32 = false;    // GL_DEPTH_COMPONENT32 is renderable
+    int subpixelBits = 0;  // GL_SUBPIXEL_BITS
+    int maxViewport = 0;  // GL_MAX_VIEWPORT_DIMS (smaller side)
+    bool hasUnorm32 = false;  // GL_DEPTH_COMPONENT32 is renderable
 };
 
 class GlBackend : public DepthBackend {

@@ -106,7 +106,7 @@ namespace cullide::raster {
 // Which edges own the pixel centres lying exactly on them (see rule 5).
 enum class FillRule : uint8_t {
     BottomLeft,  // left + bottom edges inclusive, GL window coordinates (llvmpipe FBO convention)
-    TopLeft,     // left + top edges inclusive, GL window coordinates
+    TopLeft,  // left + top edges inclusive, GL window coordinates
 };
 
 const char* toString(FillRule rule);
@@ -142,7 +142,7 @@ inline constexpr int kDefaultTileSize = 64;
 inline int64_t snapToFixed(double v, int subpixelBits) {
     const double s = v * double(int64_t(1) << subpixelBits);
     double f = double(int64_t(s));  // truncation towards zero
-    if (f > s) f -= 1.0;            // floor
+    if (f > s) f -= 1.0;  // floor
     return int64_t(f) + (s - f >= 0.5 ? 1 : 0);
 }
 
@@ -170,8 +170,8 @@ inline double clampDepth(double z) {
 // ulp(a) >= 2^-52 whenever a >= 1 (if a < 1 then r = a >= z, and rounding down cannot happen).
 inline uint32_t encodeUnorm(double z, int bits) {
     const double a = z * double(uint64_t(1) << bits);  // exact (power of two), a in [0, 2^n]
-    const double f = double(int64_t(a));                // floor, a >= 0
-    const double r = a - f;                             // exact
+    const double f = double(int64_t(a));  // floor, a >= 0
+    const double r = a - f;  // exact
     // Branch-free (the hot loop calls this per fragment): up when r - z >= 1/2 (tie: up), down
     // when r - z < -1/2. r - 1/2 is only used (and only exact) when r >= 1/2.
     const int64_t up = int64_t((r >= 0.5) & (r - 0.5 >= z));

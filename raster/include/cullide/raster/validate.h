@@ -36,16 +36,16 @@
 namespace cullide::raster {
 
 struct QueryInterval {
-    uint64_t certain = 0;   // fragments that pass under every allowed freedom
+    uint64_t certain = 0;  // fragments that pass under every allowed freedom
     uint64_t possible = 0;  // certain + ambiguous
     bool contains(uint64_t v) const { return certain <= v && v <= possible; }
 };
 
 struct IntervalOptions {
     int subpixelBits = kDefaultSubpixelBits;  // the reference's (snapping grid of the margins)
-    FillRule fillRule = FillRule::BottomLeft;   // the reference's (for its exact track)
+    FillRule fillRule = FillRule::BottomLeft;  // the reference's (for its exact track)
     int otherSubpixelBits = kDefaultSubpixelBits;  // the other implementation's GL_SUBPIXEL_BITS
-    double depthLsb = 2.0;      // constant depth margin, in units of DepthFormat::resolution()
+    double depthLsb = 2.0;  // constant depth margin, in units of DepthFormat::resolution()
     double depthFloatUlps = 4.0;  // slope term: this many 2^-24 * (1 + (|dz/dx| + |dz/dy|) * (W + H))
 };
 
@@ -53,7 +53,7 @@ struct IntervalOptions {
 // bit 0: some fragment certainly passed; bit 1: some fragment possibly passed; bit 2: the
 // reference's own (exact) fragment passed.
 struct CoverageCapture {
-    uint32_t query = 0;       // which query of the next execute()
+    uint32_t query = 0;  // which query of the next execute()
     std::vector<uint8_t> classes;  // width x height, filled by execute()
 };
 
@@ -88,8 +88,8 @@ private:
 // One query compared.
 struct QueryComparison {
     uint32_t frame = 0;
-    uint32_t list = 0;      // execute() call number within the frame's run
-    uint32_t query = 0;     // query number within the list
+    uint32_t list = 0;  // execute() call number within the frame's run
+    uint32_t query = 0;  // query number within the list
     QueryKind kind = QueryKind::SamplesPassed;
     uint64_t reference = 0, other = 0;
     QueryInterval interval;
@@ -97,7 +97,9 @@ struct QueryComparison {
     bool inInterval() const { return interval.contains(other); }
     // How far outside the interval (0 when inside).
     uint64_t outside() const {
-        return other < interval.certain ? interval.certain - other : other > interval.possible ? other - interval.possible : 0;
+        return other < interval.certain ? interval.certain - other
+            : other > interval.possible ? other - interval.possible
+                                        : 0;
     }
 };
 

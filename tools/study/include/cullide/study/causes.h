@@ -74,15 +74,15 @@ Cause decide(CullMethod method, const PairSample& s);
 struct MissedPairCause {
     oracle::IntersectingPair pair;
     Cause cause = Cause::Unexplained;
-    uint32_t call = 0;       // index of the deciding reducePCS call in CullideResult::passes
+    uint32_t call = 0;  // index of the deciding reducePCS call in CullideResult::passes
     uint32_t direction = 0;  // its direction (index into CullideOptions::directions)
 };
 
 struct Attribution {
     std::array<size_t, kCauseCount> triangles{};  // false-pruned triangles by cause
-    std::array<size_t, kCauseCount> pairs{};      // missed pairs by cause
-    std::vector<MissedPairCause> missed;          // sorted by pair
-    CullideResult result;                         // the instrumented run (same PCS as any other)
+    std::array<size_t, kCauseCount> pairs{};  // missed pairs by cause
+    std::vector<MissedPairCause> missed;  // sorted by pair
+    CullideResult result;  // the instrumented run (same PCS as any other)
 };
 
 // Runs Cullide once with an observer that records, per reducePCS call, which colliding triangles

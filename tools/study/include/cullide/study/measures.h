@@ -49,15 +49,15 @@ struct MissedPair {
 };
 
 struct PcsReport {
-    size_t pcsTriangles = 0;          // distinct PCS entries
-    size_t collidingTriangles = 0;    // triangles in some intersecting pair
+    size_t pcsTriangles = 0;  // distinct PCS entries
+    size_t collidingTriangles = 0;  // triangles in some intersecting pair
     size_t collidingInPcs = 0;
-    size_t falsePrunes[2] = {0, 0};   // false-pruned triangles, indexed by PairClass
-    size_t missedPairs[2] = {0, 0};   // indexed by PairClass
-    size_t missedSelfPairs[2] = {0, 0};     // of which within one object
+    size_t falsePrunes[2] = {0, 0};  // false-pruned triangles, indexed by PairClass
+    size_t missedPairs[2] = {0, 0};  // indexed by PairClass
+    size_t missedSelfPairs[2] = {0, 0};  // of which within one object
     size_t falsePositives = 0;
-    double efficiency = 1;            // collidingInPcs / pcsTriangles
-    std::vector<MissedPair> missed;   // sorted by pair
+    double efficiency = 1;  // collidingInPcs / pcsTriangles
+    std::vector<MissedPair> missed;  // sorted by pair
 
     size_t falsePruneCount() const { return falsePrunes[0] + falsePrunes[1]; }
 };

@@ -49,8 +49,8 @@ struct Spec {
     std::vector<int> threads{0};
     uint32_t branching = 4;
     uint64_t seed = 1;
-    int repeats = 3;      // timed runs per configuration (median, min, max)
-    bool oracle = true;   // measure against the oracle and attribute causes
+    int repeats = 3;  // timed runs per configuration (median, min, max)
+    bool oracle = true;  // measure against the oracle and attribute causes
     // Each axis' name in errors: its spec key, or the command-line option that set it.
     OptionNames names = specOptionNames("study spec");
 };
@@ -128,7 +128,7 @@ struct StudyOptions {
     Spec spec;
     Shard shard;
     std::filesystem::path out;  // .csv or .jsonl
-    bool progress = false;      // progress bar with ETA on stderr
+    bool progress = false;  // progress bar with ETA on stderr
     std::function<void(const nlohmann::ordered_json&)> onRecord;  // after each run
 };
 // Runs the sweep (or its shard), appending to the output; runs whose id is already in the
