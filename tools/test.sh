@@ -2,6 +2,10 @@
 # The whole test suite, from a fresh Debian 12 machine: installs the Debian packages the project
 # needs (tools/setup.sh), builds in Release, runs every test with CTest, then builds and runs the
 # test suite under AddressSanitizer+UndefinedBehaviorSanitizer and under ThreadSanitizer.
+# The ThreadSanitizer build links a oneTBB built with -fsanitize=thread from Debian's source package
+# of the installed libtbb-dev (tools/sanitizers/build-tbb-tsan.sh: adds a deb-src entry for Debian's
+# archive, then builds once into build-tsan/_deps/onetbb-tsan, a few minutes, reused later), so
+# that TSan sees TBB's synchronisation and needs no TBB suppression.
 #
 #   bash tools/test.sh            # everything (what CI runs)
 #   CULLIDE_SANITIZERS=0 bash tools/test.sh   # Release tests only (quicker, for development)
@@ -13,9 +17,9 @@ jobs=$(nproc)
 # setup.sh installs Mesa's EGL (llvmpipe), so the GL tests must run here, not skip.
 export CULLIDE_REQUIRE_GL=1
 
-run_suite() {  # preset name, build dir
+run_suite() {  # preset name, build dir, extra configure arguments
   echo "== test.sh: configure and build ($1) in $2"
-  cmake --preset "$1" >/dev/null
+  cmake --preset "$1" "${@:3}" >/dev/null
   cmake --build "$2" -j"$jobs"
   echo "== test.sh: run the tests ($1)"
   ctest --test-dir "$2" --output-on-failure -j"$jobs" --timeout 900
@@ -24,9 +28,11 @@ run_suite() {  # preset name, build dir
 run_suite release build
 if [ "${CULLIDE_SANITIZERS:-1}" != "0" ]; then
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-  # report_atomic_races=0: see tools/sanitizers/tsan.supp (TBB's atomics on the caller's stack).
-  export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 report_atomic_races=0 suppressions=$PWD/tools/sanitizers/tsan.supp"
+  export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tools/sanitizers/tsan.supp"
   run_suite asan build-asan
-  run_suite tsan build-tsan
+  echo "== test.sh: oneTBB with ThreadSanitizer (built once)"
+  tbb=$PWD/build-tsan/_deps/onetbb-tsan
+  bash tools/sanitizers/build-tbb-tsan.sh "$tbb"
+  run_suite tsan build-tsan -DTBB_DIR="$tbb/install/lib/cmake/TBB"
 fi
 echo "== test.sh: all test suites passed"

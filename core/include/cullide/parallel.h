@@ -1,11 +1,14 @@
 // Parallel loops on oneTBB that ThreadSanitizer can follow.
 //
-// Debian's libtbb.so is not built with -fsanitize=thread, so TSan cannot see the joins inside it
-// and reports every hand-over between a caller and TBB's workers as a race. Every parallel phase
-// of cullide goes through these helpers, which tell TSan what TBB guarantees: the caller's
-// history happens-before every task of the phase, and every task happens-before the caller's
-// continuation. Tasks of one phase are NOT ordered with each other, so a race between two tasks
-// is still reported. Without TSan they are plain tbb::parallel_for / task_arena::execute.
+// Every parallel phase of cullide goes through these helpers, which tell TSan what TBB guarantees:
+// the caller's history happens-before every task of the phase, and every task happens-before the
+// caller's continuation. Tasks of one phase are NOT ordered with each other, so a race between
+// two tasks is still reported. They were written for Debian's uninstrumented libtbb.so, whose
+// joins TSan cannot see; the tsan preset now links a libtbb built with -fsanitize=thread
+// (tools/sanitizers/build-tbb-tsan.sh), which sees those joins itself: the loop annotations are
+// now redundant (kept until a TSan run without them is clean). tsanRelease/tsanAcquire are still
+// needed for Embree's callbacks: Embree's own TBB loops are compiled into uninstrumented code.
+// Without TSan they are plain tbb::parallel_for / task_arena::execute.
 #pragma once
 
 #include <tbb/blocked_range.h>
