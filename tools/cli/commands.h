@@ -7,6 +7,7 @@
 #pragma once
 
 #include "cullide/error.h"
+#include "cullide/options.h"
 #include "cullide/scene.h"
 
 #include <CLI/CLI.hpp>
@@ -33,6 +34,12 @@ inline FrameRange selectFrames(const Animation& animation, long frame, const std
     return {size_t(frame), size_t(frame) + 1};
 }
 
+// Cullide's options (method, resolution, depth, directions, hierarchy, leaf size, branching,
+// seed) on a subcommand, with the same help everywhere; checkCullideOptions() in its callback
+// refuses an option that does not apply (--seed without --hierarchy random).
+void addCullideOptions(CLI::App* sub, OptionText& text);
+void checkCullideOptions(const CLI::App* sub, const OptionText& text);
+
 void addInfoCommand(CLI::App& app, Action& action);
 void addMakeSceneCommand(CLI::App& app, Action& action);
 void addPruneCommand(CLI::App& app, Action& action);
@@ -40,5 +47,6 @@ void addValidateCommand(CLI::App& app, Action& action);
 void addOracleCommand(CLI::App& app, Action& action);
 void addStudyCommand(CLI::App& app, Action& action);
 void addPlotCommand(CLI::App& app, Action& action);
+void addTraceCommand(CLI::App& app, Action& action);
 
 }  // namespace cullide::cli

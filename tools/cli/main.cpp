@@ -24,6 +24,7 @@ int run(int argc, char** argv) {
     cullide::cli::addOracleCommand(app, action);
     cullide::cli::addStudyCommand(app, action);
     cullide::cli::addPlotCommand(app, action);
+    cullide::cli::addTraceCommand(app, action);
 
     try {
         app.parse(argc, argv);

@@ -142,25 +142,7 @@ void addPruneCommand(CLI::App& app, Action& action) {
     CLI::App* sub =
         app.add_subcommand("prune", "Compute the potentially colliding set (PCS) of every frame of a scene");
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
-    sub->add_option("--method", o->cullide.method,
-                    "original (Cullide, contacts kept) | modified (self-intersections kept) | reliable (no "
-                    "intersecting triangle is ever pruned; CPU backend only; docs/reliable.md)")
-        ->capture_default_str();
-    sub->add_option("--resolution", o->cullide.resolution,
-                    "Viewport: N or WxH pixels (1 to " + std::to_string(kMaxViewportSide) + " per side)")
-        ->capture_default_str();
-    sub->add_option("--depth", o->cullide.depth, "Depth format: unorm bits 8..32 (e.g. 24, d16) or float")
-        ->capture_default_str();
-    sub->add_option(
-           "--directions", o->cullide.directions,
-           "View directions: 'axes' (+x -x +y -y +z -z), a count N (spread), or a list 'x,-y,z' / '1 0 0;0 1 1'")
-        ->capture_default_str();
-    sub->add_option("--hierarchy", o->cullide.hierarchy, "connectivity | random")->capture_default_str();
-    sub->add_option("--leaf-size", o->cullide.leafSize, "Triangles per hierarchy leaf (1 to 1,000,000)")
-        ->capture_default_str();
-    sub->add_option("--branching", o->cullide.branching, "Children per hierarchy node (2 to 64)")
-        ->capture_default_str();
-    sub->add_option("--seed", o->cullide.seed, "Seed of the random hierarchy");
+    addCullideOptions(sub, o->cullide);
     sub->add_option("--backend", o->backend, "cpu (the reference rasterizer) | gl (OpenGL 4.5 through headless EGL)")
         ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
@@ -176,9 +158,7 @@ void addPruneCommand(CLI::App& app, Action& action) {
                   "(exit status 1 on a false prune the method promises not to make)");
     sub->add_flag("--exact", o->exact, "Run the exact stage on the PCS: the final intersecting pairs of the pipeline");
     sub->callback([o, sub, &action] {
-        // An option that does not apply is refused, not ignored.
-        if (sub->count("--seed") && o->cullide.hierarchy != "random")
-            throw CLI::ValidationError("--seed", "applies to --hierarchy random only");
+        checkCullideOptions(sub, o->cullide);
         if (sub->count("--threads") && o->backend != "cpu")
             throw CLI::ValidationError("--threads", "applies to --backend cpu only");
         action = [o] { return runPrune(*o); };
