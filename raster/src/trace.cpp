@@ -184,8 +184,10 @@ uint64_t TraceWriter::finish() {
 
     Json header = {{"format", "cullide-trace"},
                    {"version", kTraceFormatVersion},
-                   {"cullide_version", provenance_.value("cullide_version", std::string("unknown"))},
-                   {"provenance", provenance_},
+                   {"cullide_version", provenance_.is_object()
+                                           ? provenance_.value("cullide_version", std::string("unknown"))
+                                           : std::string("unknown")},
+                   {"provenance", provenance_.is_object() ? provenance_ : Json::object()},
                    {"rules", rulesJson(rules_)},
                    {"workload", workload_},
                    {"summary",

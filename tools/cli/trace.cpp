@@ -113,9 +113,9 @@ void writeQueryPng(const raster::CoverageCapture& c, const OrthoView& view, cons
 }  // namespace
 
 Json reportComparison(const raster::TraceReader& trace, const raster::TraceComparison& c, const std::string& backend,
-                      size_t worst, Json provenance) {
+                      size_t worst, Json provenance, const std::string& title) {
     const auto& all = c.all;
-    std::printf("%s: %zu frame(s), %zu command list(s)\n  backend: %s\n", trace.path().c_str(), trace.frameCount(),
+    std::printf("%s: %zu frame(s), %zu command list(s)\n  backend: %s\n", title.c_str(), trace.frameCount(),
                 trace.listCount(), backend.c_str());
     std::printf("queries: %llu; exact %llu (%s), in interval %llu (%s), outside %llu\n", (unsigned long long)all.queries,
                 (unsigned long long)all.exact, percent(all.exact, all.queries).c_str(), (unsigned long long)all.inside,
@@ -286,7 +286,7 @@ int runCompare(const CompareOptions& o) {
     const raster::TraceReader trace(o.trace);
     const raster::TraceResults results = raster::readTraceResults(o.results);
     const raster::TraceComparison c = raster::compareTrace(trace, results, o.results);
-    Json j = reportComparison(trace, c, results.backend, o.worst, toJson(provenance(0)));
+    Json j = reportComparison(trace, c, results.backend, o.worst, toJson(provenance(0)), o.trace);
     j["results"] = o.results;
     if (!o.png.empty()) {
         const size_t n = writeComparisonPictures(trace, c, raster::worstQueries(c.queries, o.worst), o.png);

@@ -34,9 +34,10 @@ Recording recordTrace(const Animation& animation, size_t first, size_t last, con
 nlohmann::ordered_json workloadJson(const std::string& scene, const CullideOptions& options);
 
 // Prints the comparison (totals, per frame and per depth format, the worst queries with their
-// draws) and returns it as JSON (with `provenance`).
+// draws) under the title `title` and returns it as JSON (with `provenance`).
 nlohmann::ordered_json reportComparison(const raster::TraceReader& trace, const raster::TraceComparison& c,
-                                        const std::string& backend, size_t worst, nlohmann::ordered_json provenance);
+                                        const std::string& backend, size_t worst, nlohmann::ordered_json provenance,
+                                        const std::string& title);
 
 // Difference pictures of the worst queries (one per list) into `folder`; returns how many.
 size_t writeComparisonPictures(const raster::TraceReader& trace, const raster::TraceComparison& c,

@@ -90,7 +90,8 @@ int runValidate(const ValidateOptions& o) {
     results.results = raster::replayTrace(trace, *gl);
     const raster::TraceComparison comparison = raster::compareTrace(trace, results, "gl results");
     nlohmann::ordered_json report =
-        reportComparison(trace, comparison, results.backend, o.worst, toJson(provenance(0, {gl->describe()})));
+        reportComparison(trace, comparison, results.backend, o.worst, toJson(provenance(0, {gl->describe()})),
+                         "replayed on GL");
     std::printf("reference self-check: %llu of %llu reference counts outside their own intervals\n",
                 (unsigned long long)recording.referenceOutside, (unsigned long long)recording.queries);
 
