@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <tbb/info.h>
 
 #include <sys/wait.h>
 
@@ -12,6 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 
@@ -373,4 +375,53 @@ TEST(Cli, MissingOutputFolderIsNamed) {
             << args << ": " << r.output;
     }
     EXPECT_FALSE(fs::exists(missing));
+}
+
+// Every JSON output carries the provenance of its run (cullide/provenance.h), with the thread
+// count the command was given, the build's commit and no drivers for the CPU backend; the study
+// puts it in each JSON line but not in its CSV, whose columns stay as they were. Trap: a command
+// that writes threads 0 for "--threads 1", drops the key, or writes a commit other than the one
+// --version says.
+TEST(Cli, JsonOutputsCarryProvenance) {
+    const fs::path d = freshDir("provenance");
+    const std::string scene = quote(kData + "/scenes/bunny_through_cow.json");
+    const std::regex date(R"(\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}Z)");
+    // The commit as `cullide --version` says it: "cullide 0.1.0 (commit <hash>; Embree ...)".
+    const CliRun v = cullide("--version");
+    ASSERT_EQ(v.status, 0) << v.output;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(v.output, m, std::regex(R"(^cullide (\S+) \(commit ([^;]+);)"))) << v.output;
+    EXPECT_EQ(m[1].str(), CULLIDE_EXPECTED_VERSION) << v.output;
+    const std::string commit = m[2].str();
+    auto check = [&](const nlohmann::json& p, int threads, const std::string& what) {
+        EXPECT_EQ(p.at("cullide_version").get<std::string>(), CULLIDE_EXPECTED_VERSION) << what;
+        EXPECT_EQ(p.at("git_commit").get<std::string>(), commit) << what;
+        EXPECT_FALSE(p.at("compiler").get<std::string>().empty()) << what;
+        EXPECT_FALSE(p.at("cpu_model").get<std::string>().empty()) << what;
+        EXPECT_EQ(p.at("threads").get<int>(), threads) << what;
+        EXPECT_TRUE(std::regex_match(p.at("date").get<std::string>(), date)) << what;
+        EXPECT_FALSE(p.contains("drivers")) << what << ": the CPU backend has no driver";
+    };
+    const std::string prune = (d / "prune.json").string(), oracle = (d / "oracle.json").string();
+    CliRun r = cullide("prune " + scene + " --frame 4 --resolution 64 --threads 1 --json " + quote(prune));
+    ASSERT_EQ(r.status, 0) << r.output;
+    check(nlohmann::json::parse(readAll(prune)).at("provenance"), 1, "prune --json");
+    r = cullide("oracle " + scene + " --frame 4 --threads 1 --json " + quote(oracle));
+    ASSERT_EQ(r.status, 0) << r.output;
+    check(nlohmann::json::parse(readAll(oracle)).at("provenance"), 1, "oracle --json");
+    r = cullide("info --json " + scene);
+    ASSERT_EQ(r.status, 0) << r.output;
+    check(nlohmann::json::parse(r.output).at(0).at("provenance"), int(tbb::info::default_concurrency()), "info");
+
+    r = cullide("study --scenes cows:600 --resolutions 64 --repeats 1 --threads 1 2 --no-oracle -q -o " +
+                quote((d / "s.csv").string()));
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::istringstream lines(readAll(d / "s.jsonl"));
+    int n = 0;
+    for (std::string line; std::getline(lines, line); ++n) {
+        const auto rec = nlohmann::json::parse(line);
+        check(rec.at("provenance"), rec.at("threads").get<int>(), "study record " + std::to_string(n));
+    }
+    EXPECT_EQ(n, 2);
+    EXPECT_EQ(readAll(d / "s.csv").find("provenance"), std::string::npos) << "the CSV keeps its columns";
 }

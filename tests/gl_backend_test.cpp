@@ -6,8 +6,10 @@
 // Set CULLIDE_REQUIRE_GL=1 (CI, where Mesa's EGL is installed) to make that a failure instead.
 #include "cullide/depth_backend.h"
 #include "cullide/error.h"
+#include "cullide/raster/backends.h"
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/raster/gl_backend.h"
+#include "cullide/study/study.h"
 
 #include <gtest/gtest.h>
 
@@ -262,6 +264,20 @@ TEST(GlBackend, NoContextGivesAClearErrorAndTheCpuPathStillWorks) {
     ok.draw(0, 2);
     ok.endQuery();
     EXPECT_EQ(cpu->execute(ok), std::vector<uint64_t>{16});
+}
+
+// A study record of a GL run names the driver in its provenance, as the backend describes itself
+// (renderer, GL version, Mesa or vendor driver). Trap: a provenance that says only "gl", which
+// cannot tell llvmpipe from a GPU when two studies disagree.
+TEST(GlBackend, StudyRecordNamesTheDriver) {
+    GL_OR_SKIP();
+    const std::unique_ptr<DepthBackend> gl = raster::makeBackend("gl", 0);
+    study::RunConfig c;
+    c.scene = "cows:600", c.method = "modified", c.resolution = "64", c.depth = "24", c.directions = "axes";
+    c.hierarchy = "connectivity", c.backend = "gl";
+    const nlohmann::ordered_json r = study::runOne(c, study::loadStudyScene(c.scene, 0), nullptr, 1, *gl);
+    EXPECT_EQ(r.at("provenance").at("drivers"), nlohmann::ordered_json::array({gl->describe()}));
+    EXPECT_NE(gl->describe().find("gl"), std::string::npos) << gl->describe();
 }
 
 }  // namespace

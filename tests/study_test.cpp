@@ -36,10 +36,12 @@ Spec smallSpec() {
     return s;
 }
 
-// Records without their timing columns (and per-call seconds): what must not depend on the run.
+// Records without their timing columns (and per-call seconds) and without their provenance (its
+// date differs between runs, its machine between shards): what must not depend on the run.
 nlohmann::ordered_json withoutTimings(nlohmann::ordered_json r) {
     for (auto it = r.begin(); it != r.end();) it = isTimingColumn(it.key()) ? r.erase(it) : std::next(it);
     for (auto& p : r["passes"]) p.erase("seconds");
+    r.erase("provenance");
     return r;
 }
 
@@ -94,6 +96,34 @@ TEST(Study, MergeOfShardsEqualsTheUnshardedRunModuloTimings) {
     size_t lines = 0;
     for (std::string line; std::getline(csv, line);) ++lines;
     EXPECT_EQ(lines, 9u);
+}
+
+// Each record carries its provenance (the threads it ran with, the CPU backend without drivers),
+// and the CSV does not: its header and rows are the columns as before. Trap: a CSV writer that
+// follows the record's keys would grow a "provenance" column of nested JSON.
+TEST(Study, RecordsCarryProvenanceTheCsvDoesNot) {
+    test::TempDir dir;
+    StudyOptions o;
+    o.spec = smallSpec();
+    o.spec.scenes = {"cows:800"}, o.spec.methods = {"modified"}, o.spec.depths = {"24"};
+    o.spec.threads = {2}, o.spec.oracle = false;
+    o.out = dir / "p.csv";
+    EXPECT_EQ(runStudy(o), 1u);
+    const auto records = readRecords(dir / "p.csv");
+    ASSERT_EQ(records.size(), 1u);
+    const auto& p = records[0].at("provenance");
+    EXPECT_EQ(p.at("threads").get<int>(), 2);
+    EXPECT_FALSE(p.at("git_commit").get<std::string>().empty());
+    EXPECT_TRUE(p.contains("date"));
+    EXPECT_FALSE(p.contains("drivers"));
+    auto without = records[0];
+    without.erase("provenance");
+    EXPECT_EQ(csvRow(records[0]), csvRow(without));
+    std::ifstream csv(dir / "p.csv");
+    std::string header;
+    std::getline(csv, header);
+    EXPECT_EQ(header + "\n", csvHeader());
+    EXPECT_EQ(header.find("provenance"), std::string::npos);
 }
 
 // Trap: a run killed while writing leaves half a JSON line; resuming must drop it and redo that

@@ -4,6 +4,7 @@
 
 #include "cullide/error.h"
 #include "cullide/mesh_stats.h"
+#include "cullide/provenance.h"
 #include "cullide/scene_io.h"
 
 #include <nlohmann/json.hpp>
@@ -83,6 +84,8 @@ int runInfo(const InfoOptions& o) {
             nlohmann::ordered_json j = {
                 {"path", path}, {"frames", animation.frameCount()}, {"frame", o.frame}, {"objects", objects}};
             j["total"] = statsJson(total);
+            // The output stays an array of one object per file; each carries the provenance.
+            j["provenance"] = toJson(provenance(0));
             all.push_back(j);
         } else if (scene.objects.size() > 1) {
             std::printf("  total\n");

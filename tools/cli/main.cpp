@@ -3,6 +3,7 @@
 
 #include "cullide/error.h"
 #include "cullide/oracle/versions.h"
+#include "cullide/provenance.h"
 
 #include <cstdio>
 #include <exception>
@@ -14,7 +15,9 @@ int run(int argc, char** argv) {
         "cullide: image-space collision and self-intersection culling (Cullide and its "
         "self-intersection variant), with a deterministic CPU reference rasterizer"};
     app.require_subcommand(1);
-    app.set_version_flag("--version", std::string("cullide 0.1.0 (") + cullide::oracle::libraryVersions() + ")");
+    app.set_version_flag("--version",
+                         std::string("cullide ") + cullide::version() + " (commit " + cullide::gitCommit() + "; " +
+                             cullide::oracle::libraryVersions() + ")");
 
     cullide::cli::Action action;
     cullide::cli::addInfoCommand(app, action);

@@ -7,6 +7,7 @@
 #include "cullide/error.h"
 #include "cullide/file_io.h"
 #include "cullide/oracle/oracle.h"
+#include "cullide/provenance.h"
 #include "cullide/scene_io.h"
 #include "cullide/study/measures.h"
 
@@ -81,8 +82,11 @@ int runOracle(const OracleCommandOptions& o) {
     if (!o.json.empty()) {
         nlohmann::ordered_json objects = nlohmann::ordered_json::array();
         for (const Object& obj : animation.scene.objects) objects.push_back(obj.name);
-        const nlohmann::ordered_json j = {
-            {"scene", o.scene}, {"weld_by_position", o.weld}, {"objects", objects}, {"frames", frames}};
+        const nlohmann::ordered_json j = {{"scene", o.scene},
+                                          {"weld_by_position", o.weld},
+                                          {"objects", objects},
+                                          {"frames", frames},
+                                          {"provenance", toJson(provenance(o.threads))}};
         writeFileAtomically(o.json, j.dump(1) + "\n");
     }
     return 0;

@@ -9,6 +9,7 @@
 #include "cullide/file_io.h"
 #include "cullide/mesh_io.h"
 #include "cullide/options.h"
+#include "cullide/provenance.h"
 #include "cullide/raster/backends.h"
 #include "cullide/scene_io.h"
 #include "cullide/study/study.h"
@@ -130,6 +131,10 @@ int runPrune(const PruneOptions& o) {
                                     {"objects", objects},
                                     {"frames", frames}};
         for (const Vec3d& d : options.directions) j["options"]["directions"].push_back({d.x(), d.y(), d.z()});
+        // The GL backend's description names its driver; the CPU reference rasterizer has none.
+        std::vector<std::string> drivers;
+        if (o.backend != "cpu") drivers.push_back(backend->describe());
+        j["provenance"] = toJson(provenance(o.threads, drivers));
         writeFileAtomically(o.json, j.dump(1) + "\n");
     }
     return guaranteeBroken ? 1 : 0;

@@ -9,6 +9,7 @@
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
 #include "cullide/parallel.h"
+#include "cullide/provenance.h"
 #include "cullide/raster/backends.h"
 #include "cullide/scene_io.h"
 
@@ -334,6 +335,10 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     nlohmann::ordered_json passes = nlohmann::ordered_json::array();
     for (const PassStats& p : r.passes) passes.push_back(passJson(p));
     j["passes"] = passes;
+    // Not a column of the CSV; like the timings, it differs between runs of one configuration.
+    std::vector<std::string> drivers;
+    if (c.backend != "cpu") drivers.push_back(backend.describe());
+    j["provenance"] = toJson(provenance(c.threads, drivers));
     return j;
 }
 

@@ -11,9 +11,11 @@
 //   - Scenes: "bunny:N" (the deformed bunny, make-scene bunny), "cows:N" (two cows), "cylinders:N"
 //     or "cylinders:N:C", "twist:N" (a twisted bunny); or a scene/mesh file; "@K" picks frame K
 //     of a file's animation, "@all" (the default for files) every frame.
-//   - Records are flat JSON objects (plus a "passes" array of per-call stats); the CSV holds the
-//     flat columns of kColumns, in that order. Columns ending in "_ms" (and the passes' seconds)
-//     are timings: everything else is a pure function of the configuration.
+//   - Records are flat JSON objects (plus a "passes" array of per-call stats and a "provenance"
+//     object, cullide/provenance.h); the CSV holds the flat columns of kColumns, in that order.
+//     Columns ending in "_ms" (and the passes' seconds) are timings; they and the provenance (its
+//     date, and the machine of a shard) may differ between runs: everything else is a pure
+//     function of the configuration.
 //   - Errors: InputError naming the spec field, option or file.
 #pragma once
 
