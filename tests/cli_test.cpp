@@ -237,6 +237,17 @@ TEST(Cli, BadDepthSameMessageFromEveryCommand) {
     EXPECT_FALSE(fs::exists(d / "a.csv") || fs::exists(d / "b.csv")) << "a refused study wrote its output";
 }
 
+// A number too large for a double in a study spec (found by fuzzing the trace reader, which shares
+// the JSON parser): nlohmann throws out_of_range, not parse_error; it once escaped as an internal
+// error (exit 70).
+TEST(Cli, StudySpecWithAnOverflowingNumberIsBadInput) {
+    const fs::path d = freshDir("spec_overflow");
+    std::ofstream(d / "spec.json") << R"({"scenes": [1e99999]})";
+    const CliRun r = cullide("study " + quote((d / "spec.json").string()) + " -q -o " + quote((d / "s.csv").string()));
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find((d / "spec.json").string() + ": not JSON"), std::string::npos) << r.output;
+}
+
 // prune --json: the PCS as sorted [object, triangle] pairs inside the scene, per-pass statistics
 // whose triangle counts chain (each call's output is the next call's input within a level), and
 // the same PCS for 1 and 2 threads; --out writes a PLY with one colour per face.

@@ -268,6 +268,18 @@ TEST(Trace, HandEditedTracesAreRefusedWithTheProblemNamed) {
     EXPECT_TRUE(has(edited([](Parts& p) { p.header["frames"][0]["lists"][0]["view"]["depth"] = "D40"; }), "depth"));
     EXPECT_TRUE(has(edited([](Parts& p) { p.header["frames"][0]["lists"][0]["view"]["up"][1] = 2.0; }), "view"));
     EXPECT_TRUE(has(edited([](Parts& p) { p.header["rules"]["fill_rule"] = "top-right"; }), "fill_rule"));
+    // A number beyond double's range: the JSON parser's out_of_range, not its parse_error (a fuzz
+    // finding: it escaped the reader as an internal error).
+    uint64_t headerBytes = 0;
+    std::memcpy(&headerBytes, bytes.data() + 8, 8);
+    std::string text = bytes.substr(16, headerBytes);
+    const size_t at = text.find("\"depth_margin_lsb\": 2.0");
+    ASSERT_NE(at, std::string::npos);
+    text.replace(at, 23, "\"depth_margin_lsb\": 3e999");
+    text.append((8 - (16 + text.size()) % 8) % 8, ' ');
+    const uint64_t length = text.size();
+    const std::string huge = "CULTRACE" + std::string(reinterpret_cast<const char*>(&length), 8) + text + good.binary;
+    EXPECT_TRUE(has(readError(dir, huge), "not valid JSON"));
 
     // Blob contents: the first list's commands and queries, the first frame's geometry.
     const Json& list0 = good.header["frames"][0]["lists"][0];
@@ -425,6 +437,9 @@ TEST(TraceCli, RecordReplayCompareAndThePythonReader) {
     const std::string scene = std::string(CULLIDE_DATA_DIR) + "/scenes/bunny_through_cow.json";
     CliRun r = run(cli("trace record '" + scene + "' --resolution 96 -o " + q(dir / "t.trace")));
     ASSERT_EQ(r.status, 0) << r.out;
+    r = run(cli("trace record '" + scene + "' --resolution 96 -o " + q(dir / "again.trace")));
+    ASSERT_EQ(r.status, 0) << r.out;
+    EXPECT_EQ(slurp(dir / "t.trace"), slurp(dir / "again.trace"));  // same input and options, same bytes
     r = run(cli("trace replay " + q(dir / "t.trace") + " --backend cpu -o " + q(dir / "cpu.json")));
     ASSERT_EQ(r.status, 0) << r.out;
     r = run(cli("trace compare " + q(dir / "t.trace") + " " + q(dir / "cpu.json") + " --json " + q(dir / "v.json")));

@@ -325,7 +325,7 @@ TraceReader::TraceReader(std::filesystem::path path) : path_(std::move(path)), p
     if (!in.read(text.data(), std::streamsize(length))) fail("cannot read the header");
     try {
         header_ = Json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for 1e99999
         fail(std::string("the header is not valid JSON: ") + e.what());
     }
     binaryStart_ = kPreamble + length;
@@ -580,7 +580,7 @@ TraceResults readTraceResults(const std::filesystem::path& path) {
     Json j;
     try {
         j = Json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for 1e99999
         throw InputError(where, std::string("not valid JSON: ") + e.what());
     }
     if (!j.is_object()) throw InputError(where, "not a results file (a JSON object with \"backend\" and \"results\")");

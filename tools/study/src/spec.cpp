@@ -153,7 +153,7 @@ Spec loadSpec(const std::string& path) {
     if (!f) throw InputError(path, "cannot open the study spec");
     try {
         return parseSpec(nlohmann::json::parse(f), path);
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for 1e99999
         throw InputError(path, std::string("not JSON: ") + e.what());
     }
 }
