@@ -25,8 +25,9 @@ namespace {
 using namespace cullide;
 
 std::filesystem::path benchTrace(int scene, size_t triangles) {
-    return std::filesystem::temp_directory_path() / ("cullide_bench_" + std::to_string(::getpid()) + "_" +
-                                                     std::to_string(scene) + "_" + std::to_string(triangles) + ".trace");
+    return std::filesystem::temp_directory_path() /
+        ("cullide_bench_" + std::to_string(::getpid()) + "_" + std::to_string(scene) + "_" + std::to_string(triangles) +
+         ".trace");
 }
 
 // Records frame 0 of the scene into `path`; returns the file's size.

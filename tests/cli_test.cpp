@@ -1,4 +1,6 @@
 // The `cullide` command, run as a user runs it: exit codes, messages, bytes written.
+#include "test_util.h"
+
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -21,10 +23,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-    int status = -1;
-    std::string output;  // stdout and stderr together
-};
+using CliRun = cullide::test::CommandRun;
 
 std::string quote(const std::string& s) {
     std::string q = "'";
@@ -32,17 +31,8 @@ std::string quote(const std::string& s) {
     return q + "'";
 }
 
-CliRun cullide(const std::string& args) {
-    CliRun r;
-    const std::string cmd = quote(CULLIDE_CLI_PATH) + " " + args + " 2>&1";
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    const int st = pclose(p);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    return r;
+CliRun runCli(const std::string& args) {
+    return cullide::test::runCommand(quote(CULLIDE_CLI_PATH) + " " + args);
 }
 
 std::string readAll(const fs::path& p) {
@@ -77,11 +67,11 @@ const std::string kData = CULLIDE_DATA_DIR;
 // The acceptance figure: CGAL's cow has 5,804 triangles; also checks the JSON is parseable and
 // that the text and JSON forms agree.
 TEST(Cli, InfoReportsCowTriangles) {
-    const CliRun text = cullide("info " + quote(kData + "/meshes/cow.off"));
+    const CliRun text = runCli("info " + quote(kData + "/meshes/cow.off"));
     ASSERT_EQ(text.status, 0) << text.output;
     EXPECT_NE(text.output.find("triangles 5804"), std::string::npos) << text.output;
 
-    const CliRun json = cullide("info --json " + quote(kData + "/meshes/cow.off"));
+    const CliRun json = runCli("info --json " + quote(kData + "/meshes/cow.off"));
     ASSERT_EQ(json.status, 0) << json.output;
     const auto j = nlohmann::json::parse(json.output);
     EXPECT_EQ(j.at(0).at("total").at("triangles").get<size_t>(), 5804u);
@@ -93,7 +83,7 @@ TEST(Cli, InfoReportsCowTriangles) {
 TEST(Cli, InfoOnEveryBundledScene) {
     for (const char* dir : {"scenes", "meshes"})
         for (const auto& e : fs::directory_iterator(kData + "/" + dir)) {
-            const CliRun r = cullide("info " + quote(e.path().string()));
+            const CliRun r = runCli("info " + quote(e.path().string()));
             EXPECT_EQ(r.status, 0) << e.path() << ": " << r.output;
         }
 }
@@ -104,7 +94,7 @@ TEST(Cli, InfoRefusesEveryBadFile) {
     size_t n = 0;
     for (const auto& e : fs::directory_iterator(fs::path(CULLIDE_TEST_DATA_DIR) / "bad")) {
         const std::string path = e.path().string();
-        const CliRun r = cullide("info " + quote(path));
+        const CliRun r = runCli("info " + quote(path));
         EXPECT_EQ(r.status, 2) << path << ": " << r.output;
         // Scenes that refer to a broken mesh name that mesh; either way the user sees the path.
         EXPECT_NE(r.output.find(e.path().filename().string()), std::string::npos) << path << ": " << r.output;
@@ -116,7 +106,7 @@ TEST(Cli, InfoRefusesEveryBadFile) {
 
 // A file that does not exist: the commonest mistake, and the message must say so.
 TEST(Cli, InfoMissingFile) {
-    const CliRun r = cullide("info /nonexistent/dir/none.off");
+    const CliRun r = runCli("info /nonexistent/dir/none.off");
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.output.find("/nonexistent/dir/none.off"), std::string::npos) << r.output;
 }
@@ -139,7 +129,7 @@ TEST(Cli, AbsurdOptionsAreRefused) {
         {"frobnicate", "frobnicate"},
     };
     for (const auto& [args, needle] : cases) {
-        const CliRun r = cullide(args);
+        const CliRun r = runCli(args);
         EXPECT_EQ(r.status, 2) << args << ": " << r.output;
         EXPECT_NE(r.output.find(needle), std::string::npos) << args << ": " << r.output;
     }
@@ -154,8 +144,8 @@ TEST(Cli, MakeSceneIsByteReproducible) {
         const fs::path a = freshDir(kind + "_a"), b = freshDir(kind + "_b");
         const std::string opts =
             std::string(" --triangles 3000 --frames 2") + (kind == "cylinders" ? " --count 10 --seed 7" : "") + " -o ";
-        ASSERT_EQ(cullide("make-scene " + kind + opts + quote((a / "s.json").string())).status, 0);
-        ASSERT_EQ(cullide("make-scene " + kind + opts + quote((b / "s.json").string())).status, 0);
+        ASSERT_EQ(runCli("make-scene " + kind + opts + quote((a / "s.json").string())).status, 0);
+        ASSERT_EQ(runCli("make-scene " + kind + opts + quote((b / "s.json").string())).status, 0);
         size_t files = 0;
         for (const auto& e : fs::recursive_directory_iterator(a)) {
             if (!e.is_regular_file()) continue;
@@ -165,19 +155,19 @@ TEST(Cli, MakeSceneIsByteReproducible) {
             ++files;
         }
         EXPECT_GE(files, 2u) << kind;
-        const CliRun info = cullide("info " + quote((a / "s.json").string()));
+        const CliRun info = runCli("info " + quote((a / "s.json").string()));
         EXPECT_EQ(info.status, 0) << info.output;
     }
     const fs::path c = freshDir("cyl_c"), d = freshDir("cyl_d");
-    ASSERT_EQ(cullide("make-scene cylinders --count 10 --seed 1 -o " + quote((c / "s.json").string())).status, 0);
-    ASSERT_EQ(cullide("make-scene cylinders --count 10 --seed 2 -o " + quote((d / "s.json").string())).status, 0);
+    ASSERT_EQ(runCli("make-scene cylinders --count 10 --seed 1 -o " + quote((c / "s.json").string())).status, 0);
+    ASSERT_EQ(runCli("make-scene cylinders --count 10 --seed 2 -o " + quote((d / "s.json").string())).status, 0);
     EXPECT_NE(readTree(c), readTree(d)) << "seeds 1 and 2 gave the same cylinders";
 }
 
 // A generator whose input is bad fails before writing: nothing half-written is left behind.
 TEST(Cli, MakeSceneWithBadMeshWritesNothing) {
     const fs::path d = freshDir("badmesh");
-    const CliRun r = cullide("make-scene bunny --mesh /nonexistent.off -o " + quote((d / "s.json").string()));
+    const CliRun r = runCli("make-scene bunny --mesh /nonexistent.off -o " + quote((d / "s.json").string()));
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.output.find("/nonexistent.off"), std::string::npos) << r.output;
     EXPECT_TRUE(fs::is_empty(d)) << "files were written although the input was bad";
@@ -206,7 +196,7 @@ TEST(Cli, PruneRefusesBadOptions) {
         {"--backend vulkan", "--backend"},
     };
     for (const auto& [args, needle] : cases) {
-        const CliRun r = cullide("prune " + scene + " " + args);
+        const CliRun r = runCli("prune " + scene + " " + args);
         EXPECT_EQ(r.status, 2) << args << ": " << r.output;
         EXPECT_NE(r.output.find(needle), std::string::npos) << args << ": " << r.output;
     }
@@ -218,10 +208,10 @@ TEST(Cli, PruneRefusesBadOptions) {
 TEST(Cli, BadDepthSameMessageFromEveryCommand) {
     const fs::path d = freshDir("same_message");
     std::ofstream(d / "spec.json") << R"({"scenes": ["bunny:500"], "depths": [7]})";
-    const CliRun prune = cullide("prune " + quote(kData + "/meshes/cow.off") + " --depth 7");
-    const CliRun study = cullide("study --scenes bunny:500 --depths 7 -q -o " + quote((d / "a.csv").string()));
+    const CliRun prune = runCli("prune " + quote(kData + "/meshes/cow.off") + " --depth 7");
+    const CliRun study = runCli("study --scenes bunny:500 --depths 7 -q -o " + quote((d / "a.csv").string()));
     const CliRun spec =
-        cullide("study " + quote((d / "spec.json").string()) + " -q -o " + quote((d / "b.csv").string()));
+        runCli("study " + quote((d / "spec.json").string()) + " -q -o " + quote((d / "b.csv").string()));
     // The message after `name: `, to the end of its line ("" when the name is not there).
     auto cause = [](const CliRun& r, const std::string& name) {
         const size_t at = r.output.find(name + ": ");
@@ -243,7 +233,7 @@ TEST(Cli, BadDepthSameMessageFromEveryCommand) {
 TEST(Cli, StudySpecWithAnOverflowingNumberIsBadInput) {
     const fs::path d = freshDir("spec_overflow");
     std::ofstream(d / "spec.json") << R"({"scenes": [1e99999]})";
-    const CliRun r = cullide("study " + quote((d / "spec.json").string()) + " -q -o " + quote((d / "s.csv").string()));
+    const CliRun r = runCli("study " + quote((d / "spec.json").string()) + " -q -o " + quote((d / "s.csv").string()));
     EXPECT_EQ(r.status, 2) << r.output;
     EXPECT_NE(r.output.find((d / "spec.json").string() + ": not JSON"), std::string::npos) << r.output;
 }
@@ -257,8 +247,8 @@ TEST(Cli, PruneJsonAndPly) {
     std::string pcs[2];
     for (int threads : {1, 2}) {
         const std::string json = (d / ("pcs" + std::to_string(threads) + ".json")).string();
-        const CliRun r = cullide("prune " + scene + " --frame 4 --resolution 200 --threads " + std::to_string(threads) +
-                                 " --json " + quote(json) + " --out " + quote((d / "pcs.ply").string()));
+        const CliRun r = runCli("prune " + scene + " --frame 4 --resolution 200 --threads " + std::to_string(threads) +
+                                " --json " + quote(json) + " --out " + quote((d / "pcs.ply").string()));
         ASSERT_EQ(r.status, 0) << r.output;
         const auto j = nlohmann::json::parse(readAll(json));
         const auto& frame = j.at("frames").at(0);
@@ -297,7 +287,7 @@ TEST(Cli, StudySpecMutationsAreRefusedByName) {
     auto run = [&](const nlohmann::json& spec) {
         const fs::path file = d / "spec.json";
         std::ofstream(file) << spec.dump();
-        return cullide("study " + quote(file.string()) + " -q -o " + quote((d / "out.csv").string()));
+        return runCli("study " + quote(file.string()) + " -q -o " + quote((d / "out.csv").string()));
     };
     const CliRun ok = run(valid);
     ASSERT_EQ(ok.status, 0) << ok.output;
@@ -358,13 +348,13 @@ TEST(Cli, OptionsThatDoNotApplyAreRefused) {
         {"study --scenes bunny:500 --trials 3 -o " + quote((d / "t.csv").string()), "--trials"},
     };
     for (const auto& [args, needle] : cases) {
-        const CliRun r = cullide(args);
+        const CliRun r = runCli(args);
         EXPECT_EQ(r.status, 2) << args << ": " << r.output;
         EXPECT_NE(r.output.find(needle), std::string::npos) << args << ": " << r.output;
     }
     EXPECT_TRUE(fs::is_empty(d)) << "a refused command wrote its output";
 
-    const CliRun twist = cullide("make-scene twist --triangles 20000 -o " + out);
+    const CliRun twist = runCli("make-scene twist --triangles 20000 -o " + out);
     ASSERT_EQ(twist.status, 0) << twist.output;
     // "<path>: 1 object(s), N triangles, ...": about the request, not the source's 3,674.
     const size_t at = twist.output.find(" triangles,");
@@ -380,7 +370,7 @@ TEST(Cli, MissingOutputFolderIsNamed) {
     for (const std::string& args : {"prune " + cow + " --resolution 64 --json " + quote((missing / "p.json").string()),
                                     "oracle " + cow + " --json " + quote((missing / "o.json").string()),
                                     "make-scene cylinders --count 2 -o " + quote((missing / "s.json").string())}) {
-        const CliRun r = cullide(args);
+        const CliRun r = runCli(args);
         EXPECT_EQ(r.status, 2) << args << ": " << r.output;
         EXPECT_NE(r.output.find("folder " + missing.string() + " does not exist"), std::string::npos)
             << args << ": " << r.output;
@@ -398,7 +388,7 @@ TEST(Cli, JsonOutputsCarryProvenance) {
     const std::string scene = quote(kData + "/scenes/bunny_through_cow.json");
     const std::regex date(R"(\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}Z)");
     // The commit as `cullide --version` says it: "cullide 0.1.0 (commit <hash>; Embree ...)".
-    const CliRun v = cullide("--version");
+    const CliRun v = runCli("--version");
     ASSERT_EQ(v.status, 0) << v.output;
     std::smatch m;
     ASSERT_TRUE(std::regex_search(v.output, m, std::regex(R"(^cullide (\S+) \(commit ([^;]+);)"))) << v.output;
@@ -414,18 +404,18 @@ TEST(Cli, JsonOutputsCarryProvenance) {
         EXPECT_FALSE(p.contains("drivers")) << what << ": the CPU backend has no driver";
     };
     const std::string prune = (d / "prune.json").string(), oracle = (d / "oracle.json").string();
-    CliRun r = cullide("prune " + scene + " --frame 4 --resolution 64 --threads 1 --json " + quote(prune));
+    CliRun r = runCli("prune " + scene + " --frame 4 --resolution 64 --threads 1 --json " + quote(prune));
     ASSERT_EQ(r.status, 0) << r.output;
     check(nlohmann::json::parse(readAll(prune)).at("provenance"), 1, "prune --json");
-    r = cullide("oracle " + scene + " --frame 4 --threads 1 --json " + quote(oracle));
+    r = runCli("oracle " + scene + " --frame 4 --threads 1 --json " + quote(oracle));
     ASSERT_EQ(r.status, 0) << r.output;
     check(nlohmann::json::parse(readAll(oracle)).at("provenance"), 1, "oracle --json");
-    r = cullide("info --json " + scene);
+    r = runCli("info --json " + scene);
     ASSERT_EQ(r.status, 0) << r.output;
     check(nlohmann::json::parse(r.output).at(0).at("provenance"), int(tbb::info::default_concurrency()), "info");
 
-    r = cullide("study --scenes cows:600 --resolutions 64 --repeats 1 --threads 1 2 --no-oracle -q -o " +
-                quote((d / "s.csv").string()));
+    r = runCli("study --scenes cows:600 --resolutions 64 --repeats 1 --threads 1 2 --no-oracle -q -o " +
+               quote((d / "s.csv").string()));
     ASSERT_EQ(r.status, 0) << r.output;
     std::istringstream lines(readAll(d / "s.jsonl"));
     int n = 0;

@@ -27,17 +27,8 @@ const std::vector<Vec3f> kPolyPositions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0},   {0
 // Faces (4 5 1), (0 1 2 3), (1 4 6 5 2), fan-triangulated in place.
 const std::vector<Triangle> kPolyTriangles = {{4, 5, 1}, {0, 1, 2}, {0, 2, 3}, {1, 4, 6}, {1, 6, 5}, {1, 5, 2}};
 
-std::string slurp(const std::filesystem::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-void spit(const std::filesystem::path& p, const std::string& bytes) {
-    std::ofstream out(p, std::ios::binary);
-    out << bytes;
-}
+const auto slurp = test::readBytes;
+const auto spit = test::writeBytes;
 
 bool bitEqual(const Mesh& a, const Mesh& b) {
     if (a.triangles != b.triangles || a.positions.size() != b.positions.size()) return false;

@@ -15,12 +15,7 @@ namespace {
 using test::TempDir;
 using test::testData;
 
-std::string slurp(const std::filesystem::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
+const auto slurp = test::readBytes;
 
 // Trap: mesh paths resolved against the working folder instead of the scene file's; transforms
 // composed in another order than T * R * S; frames applied to the wrong object.

@@ -1,7 +1,13 @@
 #include <cctype>
 #include "test_util.h"
 
+#include <sys/wait.h>
+
+#include <array>
 #include <atomic>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -11,6 +17,29 @@ namespace cullide::test {
 
 std::string testData(const char* relative) {
     return std::string(CULLIDE_TEST_DATA_DIR) + "/" + relative;
+}
+
+std::string readBytes(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+void writeBytes(const std::filesystem::path& path, const std::string& bytes) {
+    std::ofstream(path, std::ios::binary) << bytes;
+}
+
+CommandRun runCommand(const std::string& command) {
+    CommandRun r;
+    FILE* p = popen((command + " 2>&1").c_str(), "r");
+    if (!p) return r;
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+    const int status = pclose(p);
+    r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return r;
 }
 
 TempDir::TempDir() {

@@ -34,6 +34,18 @@ Mesh nearlyCoplanarFans(uint32_t seed, int fans);
 // parameterized tests' names.
 std::string paramName(const std::string& path);
 
+// A file's bytes ("" when it cannot be read), and writing bytes to a file.
+std::string readBytes(const std::filesystem::path& path);
+void writeBytes(const std::filesystem::path& path, const std::string& bytes);
+
+// Runs a shell command: its exit status (128 + the signal when killed) and stdout and stderr
+// together.
+struct CommandRun {
+    int status = -1;
+    std::string output;
+};
+CommandRun runCommand(const std::string& command);
+
 // A fresh, empty folder under the system temp folder, removed (with its contents) on destruction.
 class TempDir {
 public:

@@ -28,16 +28,8 @@ namespace {
 using test::TempDir;
 using Json = nlohmann::ordered_json;
 
-std::string slurp(const std::filesystem::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-}
-
-void spit(const std::filesystem::path& p, const std::string& bytes) {
-    std::ofstream(p, std::ios::binary) << bytes;
-}
+const auto slurp = test::readBytes;
+const auto spit = test::writeBytes;
 
 // Two interpenetrating boxes and a third apart, moved over three frames (the third frame: the
 // same triangles as the second, so their blob is shared).
@@ -113,6 +105,17 @@ std::string readError(const TempDir& dir, const std::string& bytes) {
         return e.what();
     }
     return "";
+}
+
+// The first samples-passed query (list, query) of the trace whose interval's lower end exceeds
+// `above`; list SIZE_MAX when there is none.
+std::pair<size_t, size_t> firstSamplesQuery(const raster::TraceReader& trace, uint64_t above) {
+    for (size_t l = 0; l < trace.listCount(); ++l) {
+        const raster::TraceList tl = trace.readList(l);
+        for (size_t q = 0; q < tl.queries.size(); ++q)
+            if (tl.kinds[q] == QueryKind::SamplesPassed && tl.queries[q].interval.certain > above) return {l, q};
+    }
+    return {SIZE_MAX, 0};
 }
 
 // Trap: replay forgetting state across lists or frames, or a decode that changes a command: the
@@ -368,16 +371,8 @@ TEST(Trace, CompareChecksTheShapeAndFindsAMovedCount) {
     }
 
     // Move one samples count past its interval.
-    size_t list = 0, query = 0;
-    for (size_t l = 0; l < trace.listCount() && !list; ++l) {
-        const raster::TraceList tl = trace.readList(l);
-        for (size_t q = 0; q < tl.queries.size(); ++q)
-            if (tl.kinds[q] == QueryKind::SamplesPassed && tl.queries[q].reference > 0) {
-                list = l, query = q;
-                break;
-            }
-    }
-    ASSERT_GT(list, 0u);
+    const auto [list, query] = firstSamplesQuery(trace, 0);
+    ASSERT_NE(list, SIZE_MAX);
     raster::TraceResults moved = results;
     moved.results[list][query] = trace.readList(list).queries[query].interval.possible + 5;
     const raster::TraceComparison c = raster::compareTrace(trace, moved, "r.json");
@@ -401,22 +396,8 @@ TEST(Trace, CompareChecksTheShapeAndFindsAMovedCount) {
 // ---------------------------------------------------------------------------------------------
 // The command line: record, replay, compare, and the independent Python reader.
 
-struct CliRun {
-    int status = -1;
-    std::string out;
-};
-
-CliRun run(const std::string& command) {
-    CliRun r;
-    FILE* p = popen((command + " 2>&1").c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-    const int st = pclose(p);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    return r;
-}
+using CliRun = test::CommandRun;
+const auto run = test::runCommand;
 
 std::string cli(const std::string& args) {
     return std::string("'") + CULLIDE_CLI_PATH + "' " + args;
@@ -436,14 +417,14 @@ TEST(TraceCli, RecordReplayCompareAndThePythonReader) {
     TempDir dir;
     const std::string scene = std::string(CULLIDE_DATA_DIR) + "/scenes/bunny_through_cow.json";
     CliRun r = run(cli("trace record '" + scene + "' --resolution 96 -o " + q(dir / "t.trace")));
-    ASSERT_EQ(r.status, 0) << r.out;
+    ASSERT_EQ(r.status, 0) << r.output;
     r = run(cli("trace record '" + scene + "' --resolution 96 -o " + q(dir / "again.trace")));
-    ASSERT_EQ(r.status, 0) << r.out;
+    ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_EQ(slurp(dir / "t.trace"), slurp(dir / "again.trace"));  // same input and options, same bytes
     r = run(cli("trace replay " + q(dir / "t.trace") + " --backend cpu -o " + q(dir / "cpu.json")));
-    ASSERT_EQ(r.status, 0) << r.out;
+    ASSERT_EQ(r.status, 0) << r.output;
     r = run(cli("trace compare " + q(dir / "t.trace") + " " + q(dir / "cpu.json") + " --json " + q(dir / "v.json")));
-    EXPECT_EQ(r.status, 0) << r.out;
+    EXPECT_EQ(r.status, 0) << r.output;
     const Json verdict = Json::parse(slurp(dir / "v.json"));
     EXPECT_EQ(verdict["exact_rate"], 1.0);
     EXPECT_TRUE(verdict["passed"].get<bool>());
@@ -451,43 +432,35 @@ TEST(TraceCli, RecordReplayCompareAndThePythonReader) {
 
     r = run("/usr/bin/python3 '" + std::string(CULLIDE_SOURCE_DIR) + "/tools/trace/replay_reference.py' " +
             q(dir / "t.trace") + " -o " + q(dir / "py.json"));
-    ASSERT_EQ(r.status, 0) << r.out;
+    ASSERT_EQ(r.status, 0) << r.output;
     r = run(cli("trace compare " + q(dir / "t.trace") + " " + q(dir / "py.json")));
-    EXPECT_EQ(r.status, 0) << r.out;
-    EXPECT_NE(r.out.find("exact"), std::string::npos) << r.out;
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("exact"), std::string::npos) << r.output;
 
     Json moved = Json::parse(slurp(dir / "py.json"));
     const raster::TraceReader trace(dir / "t.trace");
-    size_t list = 0, query = 0;
-    for (size_t l = 0; l < trace.listCount() && !list; ++l) {
-        const raster::TraceList tl = trace.readList(l);
-        for (size_t k = 0; k < tl.queries.size(); ++k)
-            if (tl.kinds[k] == QueryKind::SamplesPassed && tl.queries[k].reference > 3) {
-                list = l, query = k;
-                moved["results"][l][k] = tl.queries[k].interval.certain - 1;
-                break;
-            }
-    }
-    ASSERT_GT(list, 0u);
+    const auto [list, query] = firstSamplesQuery(trace, 3);
+    ASSERT_NE(list, SIZE_MAX);
+    moved["results"][list][query] = trace.readList(list).queries[query].interval.certain - 1;
     spit(dir / "moved.json", moved.dump());
     r = run(cli("trace compare " + q(dir / "t.trace") + " " + q(dir / "moved.json")));
-    EXPECT_EQ(r.status, 1) << r.out;
+    EXPECT_EQ(r.status, 1) << r.output;
     const std::string name = "list " + std::to_string(list) + " query " + std::to_string(query);
-    EXPECT_NE(r.out.find(name), std::string::npos) << name << "\n" << r.out;
-    EXPECT_NE(r.out.find("OUTSIDE by 1"), std::string::npos) << r.out;
+    EXPECT_NE(r.output.find(name), std::string::npos) << name << "\n" << r.output;
+    EXPECT_NE(r.output.find("OUTSIDE by 1"), std::string::npos) << r.output;
 
     // Shape errors and bad files: exit 2 with the file named.
     Json shorter = Json::parse(slurp(dir / "py.json"));
     shorter["results"].erase(shorter["results"].size() - 1);
     spit(dir / "short.json", shorter.dump());
     r = run(cli("trace compare " + q(dir / "t.trace") + " " + q(dir / "short.json")));
-    EXPECT_EQ(r.status, 2) << r.out;
-    EXPECT_NE(r.out.find((dir / "short.json").string()), std::string::npos) << r.out;
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find((dir / "short.json").string()), std::string::npos) << r.output;
     r = run(cli("trace replay " + q(dir / "py.json") + " -o " + q(dir / "x.json")));
-    EXPECT_EQ(r.status, 2) << r.out;
-    EXPECT_NE(r.out.find("not a cullide trace"), std::string::npos) << r.out;
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("not a cullide trace"), std::string::npos) << r.output;
     r = run(cli("trace record '" + scene + "' --method reliable -o " + q(dir / "r.trace")));
-    EXPECT_EQ(r.status, 2) << r.out;
+    EXPECT_EQ(r.status, 2) << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir / "r.trace"));
 }
 
@@ -502,11 +475,11 @@ TEST(TraceCli, GlReplayIsInsideEveryInterval) {
     TempDir dir;
     const std::string scene = std::string(CULLIDE_DATA_DIR) + "/scenes/bunny_through_cow.json";
     CliRun r = run(cli("trace record '" + scene + "' --resolution 128 -o " + q(dir / "t.trace")));
-    ASSERT_EQ(r.status, 0) << r.out;
+    ASSERT_EQ(r.status, 0) << r.output;
     r = run(cli("trace replay " + q(dir / "t.trace") + " --backend gl -o " + q(dir / "gl.json")));
-    ASSERT_EQ(r.status, 0) << r.out;
+    ASSERT_EQ(r.status, 0) << r.output;
     r = run(cli("trace compare " + q(dir / "t.trace") + " " + q(dir / "gl.json") + " --json " + q(dir / "v.json")));
-    EXPECT_EQ(r.status, 0) << r.out;
+    EXPECT_EQ(r.status, 0) << r.output;
     const Json v = Json::parse(slurp(dir / "v.json"));
     EXPECT_EQ(v["in_interval_rate"], 1.0);
     EXPECT_NE(v["backend"].get<std::string>().find("gl"), std::string::npos);

@@ -8,6 +8,7 @@
 #include "cullide/raster/gl_backend.h"
 #include "cullide/raster/validate.h"
 #include "cullide/scene_io.h"
+#include "test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -191,14 +192,8 @@ TEST(Validate, BundledScenesHaveNoQueryOutsideItsInterval) {
 
 // Runs `cullide ARGS`: the exit status (128 + the signal when killed) and stdout and stderr together.
 std::pair<int, std::string> cli(const std::string& args) {
-    FILE* p = popen((std::string("'") + CULLIDE_CLI_PATH + "' " + args + " 2>&1").c_str(), "r");
-    if (!p) return {-1, "popen failed"};
-    std::string out;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) out.append(buf.data(), n);
-    const int status = pclose(p);
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), out};
+    const test::CommandRun r = test::runCommand(std::string("'") + CULLIDE_CLI_PATH + "' " + args);
+    return {r.status, r.output};
 }
 
 // Trap: the command exiting 0 when it should report, or not listing what it compared.

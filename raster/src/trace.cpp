@@ -71,15 +71,15 @@ std::array<uint32_t, 4> encodeCommand(const Command& c) {
         }
         case Command::Op::SetDepthFunc: return {OpDepthFunc, uint32_t(c.func), 0, 0};
         case Command::Op::SetDepthMask: return {OpDepthMask, c.mask ? 1u : 0u, 0, 0};
-        case Command::Op::BeginQuery:
-            return {OpBeginQuery, c.queryKind == QueryKind::AnySamplesPassed ? 1u : 0u, 0, 0};
+        case Command::Op::BeginQuery: return {OpBeginQuery, c.queryKind == QueryKind::AnySamplesPassed ? 1u : 0u, 0, 0};
         case Command::Op::EndQuery: return {OpEndQuery, 0, 0, 0};
         case Command::Op::Draw: return {OpDraw, c.first, c.count, 0};
         case Command::Op::ClearIntervals:
         case Command::Op::DrawConservative: break;
     }
-    throw InputError("trace", "conservative commands (the reliable method) have no GL or Vulkan counterpart and "
-                              "cannot be recorded; record the original or modified method");
+    throw InputError("trace",
+                     "conservative commands (the reliable method) have no GL or Vulkan counterpart and "
+                     "cannot be recorded; record the original or modified method");
 }
 
 std::string fileSize(uint64_t n) {
@@ -126,8 +126,8 @@ TraceWriter::~TraceWriter() {
 Json TraceWriter::blob(const void* data, size_t bytes, const char* dtype, size_t rows, size_t cols) {
     static const char zeros[8] = {};
     const size_t pad = size_t((8 - binaryBytes_ % 8) % 8);
-    const bool ok = std::fwrite(zeros, 1, pad, scratch_) == pad &&
-        (bytes == 0 || std::fwrite(data, 1, bytes, scratch_) == bytes);
+    const bool ok =
+        std::fwrite(zeros, 1, pad, scratch_) == pad && (bytes == 0 || std::fwrite(data, 1, bytes, scratch_) == bytes);
     if (!ok) throw InputError(path_.string(), std::string("cannot write: ") + std::strerror(errno));
     binaryBytes_ += pad;
     Json ref = {{"offset", binaryBytes_}, {"dtype", dtype}, {"shape", Json::array({rows, cols})}};
@@ -184,9 +184,9 @@ uint64_t TraceWriter::finish() {
 
     Json header = {{"format", "cullide-trace"},
                    {"version", kTraceFormatVersion},
-                   {"cullide_version", provenance_.is_object()
-                                           ? provenance_.value("cullide_version", std::string("unknown"))
-                                           : std::string("unknown")},
+                   {"cullide_version",
+                    provenance_.is_object() ? provenance_.value("cullide_version", std::string("unknown"))
+                                            : std::string("unknown")},
                    {"provenance", provenance_.is_object() ? provenance_ : Json::object()},
                    {"rules", rulesJson(rules_)},
                    {"workload", workload_},
@@ -267,7 +267,8 @@ std::vector<double> numbers(const Json& obj, const char* key, const std::string&
     if (!v.is_array() || v.size() != count)
         throw std::invalid_argument(where + "." + key + " is not an array of " + std::to_string(count) + " numbers");
     std::vector<double> out;
-    for (size_t i = 0; i < count; ++i) out.push_back(numberField(v[i], where + "." + key + "[" + std::to_string(i) + "]"));
+    for (size_t i = 0; i < count; ++i)
+        out.push_back(numberField(v[i], where + "." + key + "[" + std::to_string(i) + "]"));
     return out;
 }
 
@@ -395,17 +396,20 @@ TraceReader::BlobRef TraceReader::parseBlob(const Json& j, const std::string& wh
                                             size_t cols) const {
     BlobRef b;
     b.offset = unsignedField(j, "offset", where, binaryBytes_);
-    if (b.offset % 8 != 0) throw std::invalid_argument(where + ".offset " + std::to_string(b.offset) + " is not a multiple of 8");
+    if (b.offset % 8 != 0)
+        throw std::invalid_argument(where + ".offset " + std::to_string(b.offset) + " is not a multiple of 8");
     const Json& type = field(j, "dtype", where);
     if (type != dtype) throw std::invalid_argument(where + ".dtype is " + type.dump() + ", expected \"" + dtype + "\"");
     const Json& shape = field(j, "shape", where);
     if (!shape.is_array() || shape.size() != 2 || !shape[0].is_number_unsigned() || shape[1] != cols)
-        throw std::invalid_argument(where + ".shape is " + shape.dump() + ", expected [rows, " + std::to_string(cols) + "]");
+        throw std::invalid_argument(where + ".shape is " + shape.dump() + ", expected [rows, " + std::to_string(cols) +
+                                    "]");
     b.rows = shape[0].get<uint64_t>();
     const uint64_t item = dtype[2] == '8' ? 8 : 4;
     if (b.rows > (binaryBytes_ - b.offset) / (item * cols))
-        throw std::invalid_argument(where + ": " + std::to_string(b.rows) + " rows at offset " + std::to_string(b.offset) +
-                                    " run past the binary section's " + fileSize(binaryBytes_));
+        throw std::invalid_argument(where + ": " + std::to_string(b.rows) + " rows at offset " +
+                                    std::to_string(b.offset) + " run past the binary section's " +
+                                    fileSize(binaryBytes_));
     return b;
 }
 
@@ -598,8 +602,9 @@ TraceResults readTraceResults(const std::filesystem::path& path) {
         out.reserve(list.size());
         for (size_t q = 0; q < list.size(); ++q) {
             if (!list[q].is_number_unsigned())
-                throw InputError(where, "list " + std::to_string(l) + " query " + std::to_string(q) + ": " +
-                                            list[q].dump() + " is not a non-negative integer");
+                throw InputError(where,
+                                 "list " + std::to_string(l) + " query " + std::to_string(q) + ": " + list[q].dump() +
+                                     " is not a non-negative integer");
             out.push_back(list[q].get<uint64_t>());
         }
     }
@@ -625,13 +630,15 @@ void writeTraceResults(const std::filesystem::path& path, const TraceResults& re
 
 TraceComparison compareTrace(const TraceReader& trace, const TraceResults& results, const std::string& resultsPath) {
     if (results.results.size() != trace.listCount())
-        throw InputError(resultsPath, "has " + std::to_string(results.results.size()) + " result lists, but " +
-                                          trace.path() + " has " + std::to_string(trace.listCount()) + " command lists");
+        throw InputError(resultsPath,
+                         "has " + std::to_string(results.results.size()) + " result lists, but " + trace.path() +
+                             " has " + std::to_string(trace.listCount()) + " command lists");
     for (size_t l = 0; l < trace.listCount(); ++l)
         if (results.results[l].size() != trace.queryCount(l))
-            throw InputError(resultsPath, "list " + std::to_string(l) + " has " +
-                                              std::to_string(results.results[l].size()) + " results, but the trace's list " +
-                                              std::to_string(l) + " has " + std::to_string(trace.queryCount(l)) + " queries");
+            throw InputError(resultsPath,
+                             "list " + std::to_string(l) + " has " + std::to_string(results.results[l].size()) +
+                                 " results, but the trace's list " + std::to_string(l) + " has " +
+                                 std::to_string(trace.queryCount(l)) + " queries");
     TraceComparison c;
     c.formats.reserve(trace.listCount());
     for (size_t l = 0; l < trace.listCount(); ++l) {

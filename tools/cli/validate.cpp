@@ -66,19 +66,19 @@ int runValidate(const ValidateOptions& o) {
     rules.otherSubpixelBits = std::max(1, gl->info().subpixelBits);
     rules.depthLsb = o.depthLsb;
 
-    std::printf("%s: %s, %dx%d, %s, %zu direction(s)\n  reference: cpu reference (%d subpixel bits, %s)\n"
-                "  other:     %s\n",
-                o.scene.c_str(), toString(options.method), options.width, options.height,
-                options.depth.name().c_str(), options.directions.size(), rules.subpixelBits,
-                raster::toString(rules.fillRule), gl->describe().c_str());
+    std::printf(
+        "%s: %s, %dx%d, %s, %zu direction(s)\n  reference: cpu reference (%d subpixel bits, %s)\n"
+        "  other:     %s\n",
+        o.scene.c_str(), toString(options.method), options.width, options.height, options.depth.name().c_str(),
+        options.directions.size(), rules.subpixelBits, raster::toString(rules.fillRule), gl->describe().c_str());
 
     // 1. Record on the reference.
     ScratchTrace scratch;
     scratch.keep = !o.trace.empty();
-    scratch.path = scratch.keep ? o.trace
-                                : (std::filesystem::temp_directory_path() /
-                                   ("cullide-validate-" + std::to_string(::getpid()) + ".trace"))
-                                      .string();
+    scratch.path = scratch.keep
+        ? o.trace
+        : (std::filesystem::temp_directory_path() / ("cullide-validate-" + std::to_string(::getpid()) + ".trace"))
+              .string();
     const Recording recording =
         recordTrace(animation, first, last, options, rules, 0, scratch.path, workloadJson(o.scene, options));
     const raster::TraceReader trace(scratch.path);
@@ -89,9 +89,8 @@ int runValidate(const ValidateOptions& o) {
     results.backend = gl->describe();
     results.results = raster::replayTrace(trace, *gl);
     const raster::TraceComparison comparison = raster::compareTrace(trace, results, "gl results");
-    nlohmann::ordered_json report =
-        reportComparison(trace, comparison, results.backend, o.worst, toJson(provenance(0, {gl->describe()})),
-                         "replayed on GL");
+    nlohmann::ordered_json report = reportComparison(trace, comparison, results.backend, o.worst,
+                                                     toJson(provenance(0, {gl->describe()})), "replayed on GL");
     std::printf("reference self-check: %llu of %llu reference counts outside their own intervals\n",
                 (unsigned long long)recording.referenceOutside, (unsigned long long)recording.queries);
 
@@ -148,7 +147,8 @@ void addValidateCommand(CLI::App& app, Action& action) {
     sub->add_option("--frame", o->frame, "Validate only this frame (default: every frame)")
         ->check(CLI::NonNegativeNumber);
     sub->add_option("--png", o->png, "Write difference pictures of the worst queries' coverage into this folder");
-    sub->add_option("--json", o->json, "Write the verdict (rates, per frame and depth format, worst queries, PCS) as JSON");
+    sub->add_option("--json", o->json,
+                    "Write the verdict (rates, per frame and depth format, worst queries, PCS) as JSON");
     sub->add_option("--trace", o->trace, "Keep the recorded trace in this file (replayable with `cullide trace`)");
     sub->add_option("--worst", o->worst, "How many worst queries to list")->capture_default_str();
     sub->add_option("--depth-margin", o->depthLsb,
