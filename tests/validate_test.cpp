@@ -124,6 +124,161 @@ TEST(QueryIntervals, PixelAlignedSeparatedBoxesHaveNoAmbiguity) {
     EXPECT_EQ(r[0].certain, uint64_t(11 * 16 - 5 * 7));
 }
 
+// Everything execute() reports for one list, for comparing thread counts and band splits.
+struct IntervalRun {
+    std::vector<QueryInterval> intervals;
+    std::vector<uint64_t> exact;
+    bool exactValid = false;
+    std::vector<uint8_t> classes;
+    bool operator==(const IntervalRun& o) const {
+        return exactValid == o.exactValid && exact == o.exact && classes == o.classes &&
+            std::equal(intervals.begin(), intervals.end(), o.intervals.begin(), o.intervals.end(),
+                       [](const QueryInterval& a, const QueryInterval& b) {
+                           return a.certain == b.certain && a.possible == b.possible;
+                       });
+    }
+};
+
+// Runs `lists` in order on one evaluator (state carries over, as in GL), capturing query
+// `captureQuery` of each list.
+std::vector<IntervalRun> runIntervals(int threads, int bandRows, const std::vector<Vec3f>& p,
+                                      const std::vector<Triangle>& t, const OrthoView& view,
+                                      const std::vector<CommandList>& lists, uint32_t captureQuery) {
+    raster::IntervalOptions o;
+    o.threads = threads;
+    o.bandRows = bandRows;
+    raster::QueryIntervals iv(o);
+    iv.setGeometry(p, t);
+    iv.setView(view);
+    std::vector<IntervalRun> out;
+    for (const CommandList& list : lists) {
+        IntervalRun r;
+        raster::CoverageCapture capture;
+        capture.query = std::min(captureQuery, list.queryCount() - 1);
+        r.intervals = iv.execute(list, &r.exact, &r.exactValid, &capture);
+        r.classes = std::move(capture.classes);
+        out.push_back(std::move(r));
+    }
+    return out;
+}
+
+// The splits compared: automatic bands at several thread counts, 1-row bands (every triangle
+// spans bands), odd band heights, and one band (the serial order).
+const std::vector<std::pair<int, int>> kSplits = {{1, 0}, {2, 0}, {3, 0},  {7, 0},      {1, 1},
+                                                  {3, 1}, {2, 5}, {7, 13}, {1, 1 << 20}};
+
+// Trap: the band-parallel execute() giving different intervals, exact counts, exactValid or
+// coverage classes for different thread counts or band splits (a triangle's fragments lost or
+// doubled at band borders, clears or state changes applied to one band only, per-band counters
+// summed wrongly, any-samples queries reduced per band instead of at the end), on Cullide-like
+// lists with clears between passes, depth-function and mask changes and any-samples queries,
+// run back to back so that state carries across lists.
+TEST(QueryIntervals, ThreadCountsAndBandSplitsGiveIdenticalResults) {
+    for (const DepthFormat& f : {DepthFormat::unorm(24), DepthFormat::float32()}) {
+        const Soup s = randomSoup(23, 700, 0.12f);
+        const OrthoView view = fitted(s, Vec3d(0.3, 1, -0.4), 83, f);
+        std::vector<CommandList> lists = {cullideLikeList(uint32_t(s.t.size()), 9),
+                                          cullideLikeList(uint32_t(s.t.size()), 40)};
+        CommandList noClear;  // no clear: builds on the previous list's buffer
+        noClear.depthFunc(DepthFunc::LEqual);
+        noClear.beginQuery(QueryKind::AnySamplesPassed);
+        noClear.draw(0, 350);
+        noClear.endQuery();
+        noClear.depthMask(false);
+        noClear.depthFunc(DepthFunc::NotEqual);
+        noClear.beginQuery();
+        noClear.draw(100, 600);
+        noClear.endQuery();
+        lists.push_back(noClear);
+        const std::vector<IntervalRun> serial = runIntervals(1, 1 << 20, s.p, s.t, view, lists, 3);
+        uint64_t counted = 0;
+        for (const IntervalRun& r : serial)
+            for (const QueryInterval& q : r.intervals) counted += q.possible;
+        ASSERT_GT(counted, 0u);  // sanity: the lists do count fragments
+        for (const auto& [threads, rows] : kSplits) {
+            const std::vector<IntervalRun> got = runIntervals(threads, rows, s.p, s.t, view, lists, 3);
+            ASSERT_EQ(got.size(), serial.size());
+            for (size_t l = 0; l < got.size(); ++l)
+                EXPECT_TRUE(got[l] == serial[l])
+                    << f.name() << ", " << threads << " threads, band rows " << rows << ", list " << l;
+        }
+    }
+}
+
+// Trap: a triangle spanning many bands set up or counted in only some of them, or its
+// invariance rule (the stored depth written by this very triangle) broken at band borders: big
+// triangles covering the viewport drawn over, under and again after small ones.
+TEST(QueryIntervals, TriangleSpanningManyBandsIsCountedOnceInEach) {
+    Soup s = randomSoup(5, 200, 0.1f);
+    const uint32_t big = uint32_t(s.t.size());
+    const uint32_t v = uint32_t(s.p.size());
+    s.p.insert(s.p.end(), {{-0.2f, -0.3f, 0.45f}, {1.3f, 0.1f, 0.5f}, {0.4f, 1.4f, 0.55f}});
+    s.p.insert(s.p.end(), {{1.2f, 1.2f, 0.6f}, {-0.1f, 1.1f, 0.3f}, {0.9f, -0.2f, 0.5f}});
+    s.t.push_back({v, v + 1, v + 2});
+    s.t.push_back({v + 3, v + 4, v + 5});
+    OrthoView view;
+    view.xmin = 0, view.xmax = 1, view.ymin = 0, view.ymax = 1, view.znear = 0, view.zfar = 1;
+    view.width = 61, view.height = 97;
+    CommandList list;
+    list.clear();
+    list.beginQuery();
+    list.draw(big, 2);  // the big ones first: written everywhere
+    list.endQuery();
+    list.beginQuery();
+    list.draw(0, big);
+    list.endQuery();
+    list.depthMask(false);
+    list.depthFunc(DepthFunc::Equal);  // the same triangles again: invariance
+    list.beginQuery();
+    list.draw(big, 2);
+    list.endQuery();
+    list.depthFunc(DepthFunc::GEqual);
+    list.beginQuery(QueryKind::AnySamplesPassed);
+    list.draw(big + 1, 1);
+    list.endQuery();
+    const std::vector<CommandList> lists = {list};
+    const std::vector<IntervalRun> serial = runIntervals(1, 1 << 20, s.p, s.t, view, lists, 2);
+    ASSERT_GT(serial[0].intervals[0].certain, uint64_t(61 * 97 / 2));  // sanity: they are big
+    ASSERT_GT(serial[0].intervals[2].certain, 0u);  // sanity: the invariance rule applies
+    for (const auto& [threads, rows] : kSplits)
+        EXPECT_TRUE(runIntervals(threads, rows, s.p, s.t, view, lists, 2)[0] == serial[0])
+            << threads << " threads, band rows " << rows;
+}
+
+// Trap: exactValid taken only from the bands a clipped triangle touches (or from the pixels it
+// counts): a triangle needing clipping (a vertex beyond the far plane) distrusts the exact track
+// even when none of its fragments counts (drawn under NEVER, no query open) and its pixels lie in
+// the last rows only; a later clear trusts it again, in list order.
+TEST(QueryIntervals, ClippedTriangleThatCountsNothingStillClearsExactValid) {
+    const std::vector<Vec3f> p = {{2, 30, 0.5f}, {5, 30, 0.5f}, {3, 31.5f, 1.7f}};
+    const std::vector<Triangle> t = {{0, 1, 2}};
+    OrthoView view;
+    view.xmin = 0, view.xmax = 32, view.ymin = 0, view.ymax = 32, view.znear = 0, view.zfar = 1;
+    view.width = 32, view.height = 32;
+    CommandList clippedLast, clearedAfter, clean;
+    clippedLast.clear();
+    clippedLast.depthFunc(DepthFunc::Never);
+    clippedLast.draw(0, 1);
+    clippedLast.beginQuery();
+    clippedLast.endQuery();
+    clearedAfter.depthFunc(DepthFunc::Never);
+    clearedAfter.draw(0, 1);
+    clearedAfter.clear();
+    clearedAfter.beginQuery();
+    clearedAfter.endQuery();
+    clean.beginQuery();
+    clean.endQuery();
+    const std::vector<CommandList> lists = {clean, clippedLast, clean, clearedAfter, clean};
+    for (const auto& [threads, rows] : kSplits) {
+        const std::vector<IntervalRun> r = runIntervals(threads, rows, p, t, view, lists, 0);
+        const std::vector<bool> valid = {r[0].exactValid, r[1].exactValid, r[2].exactValid, r[3].exactValid,
+                                         r[4].exactValid};
+        EXPECT_EQ(valid, std::vector<bool>({true, false, false, true, true}))
+            << threads << " threads, band rows " << rows;
+        EXPECT_EQ(r[1].intervals[0].possible, 0u);
+    }
+}
+
 bool glMissing(std::string& why) {
     return !raster::glBackendAvailable(&why);
 }

@@ -525,8 +525,15 @@ TraceList TraceReader::readList(size_t index) const {
 // ---------------------------------------------------------------------------------------------
 // Recording and replaying
 
-TraceRecorder::TraceRecorder(DepthBackend& reference, TraceWriter& writer, const TraceRules& rules)
-    : reference_(reference), writer_(writer), intervals_(rules.intervalOptions()) {}
+namespace {
+IntervalOptions withThreads(IntervalOptions o, int threads) {
+    o.threads = threads;
+    return o;
+}
+}  // namespace
+
+TraceRecorder::TraceRecorder(DepthBackend& reference, TraceWriter& writer, const TraceRules& rules, int threads)
+    : reference_(reference), writer_(writer), intervals_(withThreads(rules.intervalOptions(), threads)) {}
 
 void TraceRecorder::setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) {
     reference_.setGeometry(positions, triangles);

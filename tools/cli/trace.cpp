@@ -55,7 +55,7 @@ Recording recordTrace(const Animation& animation, size_t first, size_t last, con
     const std::unique_ptr<raster::CpuBackend> cpu = raster::makeCpuBackend(cpuOptions);
     // No date: the same input and options give the same bytes.
     raster::TraceWriter writer(path, rules, workload, toJson(provenance(threads, {}, false)));
-    raster::TraceRecorder recorder(*cpu, writer, rules);
+    raster::TraceRecorder recorder(*cpu, writer, rules, threads);
     Recording out;
     for (size_t f = first; f < last; ++f) {
         recorder.setFrame(uint32_t(f));

@@ -153,7 +153,8 @@ private:
 // Conservative commands are refused (no GPU counterpart to validate).
 class TraceRecorder : public DepthBackend {
 public:
-    TraceRecorder(DepthBackend& reference, TraceWriter& writer, const TraceRules& rules);
+    // `threads`: the interval evaluator's workers (IntervalOptions::threads; 0: oneTBB's default).
+    TraceRecorder(DepthBackend& reference, TraceWriter& writer, const TraceRules& rules, int threads = 0);
     std::string describe() const override { return "trace recorder: " + reference_.describe(); }
     void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override;
     void setView(const OrthoView& view) override;

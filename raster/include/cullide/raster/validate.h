@@ -29,6 +29,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -47,6 +48,12 @@ struct IntervalOptions {
     int otherSubpixelBits = kDefaultSubpixelBits;  // the other implementation's GL_SUBPIXEL_BITS
     double depthLsb = 2.0;  // constant depth margin, in units of DepthFormat::resolution()
     double depthFloatUlps = 4.0;  // slope term: this many 2^-24 * (1 + (|dz/dx| + |dz/dy|) * (W + H))
+    // Worker threads of execute() (0: oneTBB's default; else a task_arena of this size, 1 to 1024),
+    // as CpuBackendOptions::threads. Results are identical for every value.
+    int threads = 0;
+    // Rows per band of execute()'s parallel split (0: chosen from the work and the thread count).
+    // Results are identical for every value; tests force 1-row and single-band splits with it.
+    int bandRows = 0;
 };
 
 // Per-pixel classes of one query's fragments, for difference pictures (row 0 at the bottom):
@@ -61,9 +68,15 @@ struct CoverageCapture {
 // backend (geometry, view, command lists; state persists across lists, as in GL) and returns
 // an interval per query. It also keeps the reference's exact result ("exact track", the CPU
 // reference's rules re-derived from rules.h) as a self-check while no triangle needed clipping.
+// execute() is multithreaded and deterministic: a pixel's state depends only on the fragments at
+// that pixel, so bands of rows run in parallel, each walking the whole list, and the per-query
+// counts (integers) are summed; results are bit-identical for any thread count and band split.
 class QueryIntervals {
 public:
     explicit QueryIntervals(const IntervalOptions& options = {});
+    ~QueryIntervals();
+    QueryIntervals(QueryIntervals&&) noexcept;
+    QueryIntervals& operator=(QueryIntervals&&) noexcept;
     void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles);
     void setView(const OrthoView& view);
     // Intervals per query. `exact` (optional) receives the exact track's counts; `exactValid`
@@ -72,8 +85,9 @@ public:
                                        bool* exactValid = nullptr, CoverageCapture* capture = nullptr);
 
 private:
-    struct Impl;
+    struct Impl;  // the thread arena and per-list scratch (validate.cpp)
     IntervalOptions options_;
+    std::unique_ptr<Impl> impl_;
     std::vector<Vec3f> positions_;
     std::vector<Triangle> triangles_;
     OrthoView view_;
