@@ -63,7 +63,8 @@ endif()
 if(PYTHON)
   set(ENV{PYTHONPATH} "${prefix}/lib/python3/dist-packages")
   set(ENV{PYTHONDONTWRITEBYTECODE} 1)
-  run(${PYTHON} -c "import cullide, os; print(cullide.__version__); print(os.path.realpath(cullide.data_dir()))"
+  # (newlines, not semicolons: a ';' would split the argument into a CMake list)
+  run(${PYTHON} -c "import cullide, os\nprint(cullide.__version__)\nprint(os.path.realpath(cullide.data_dir()))"
       WORKING_DIRECTORY ${WORK_DIR})
   if(NOT last_output MATCHES "^${VERSION}\n${prefix}/share/cullide/data")
     message(FATAL_ERROR "installed Python package: ${last_output}")
