@@ -20,11 +20,14 @@ CpuBackend = _cullide.CpuBackend
 
 
 def _find_resources():
-    """The folder holding data/ and tools/: $CULLIDE_RESOURCE_DIR, else the source tree for the
-    build tree's package, else share/cullide beside the installed package."""
+    """The folder holding data/ and tools/: $CULLIDE_RESOURCE_DIR, else share/ inside the package
+    (pip), else the source tree for the build tree's package, else share/cullide relative to the
+    package installed by cmake --install."""
     if _os.environ.get("CULLIDE_RESOURCE_DIR"):
         return _os.environ["CULLIDE_RESOURCE_DIR"]
     here = _os.path.dirname(_os.path.abspath(__file__))
+    if _os.path.isdir(_os.path.join(here, "share", "data")):  # installed by pip (setup.py)
+        return _os.path.join(here, "share")
     try:
         from . import _build_tree
 
