@@ -45,8 +45,10 @@ std::filesystem::path resourceDir() {
     std::error_code ec;
     const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
     if (ec) return sourceResourceDir();  // no /proc: nothing better to go by
-    if (isWithin(exe, CULLIDE_BINARY_DIR)) return sourceResourceDir();
-    return (exe.parent_path() / ".." / "share" / "cullide").lexically_normal();
+    const std::filesystem::path installed = (exe.parent_path() / ".." / "share" / "cullide").lexically_normal();
+    // An installed layout wins even inside the build tree (an install test's prefix may lie there).
+    if (!std::filesystem::exists(installed, ec) && isWithin(exe, CULLIDE_BINARY_DIR)) return sourceResourceDir();
+    return installed;
 }
 
 std::filesystem::path dataDir() {

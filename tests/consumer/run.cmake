@@ -2,7 +2,7 @@
 #   1. builds tests/consumer/ against it with find_package(cullide 0.2) and runs it on the installed cow;
 #   2. runs the installed `cullide`: --version is the package's version; make-scene reads the
 #      installed share/cullide/data, and with that mesh removed fails naming the prefix (so the
-#      installed command never falls back to the source tree);
+#      installed command never falls back to the source tree); plot finds the installed plot.py;
 #   3. pkg-config --cflags --libs cullide points into the prefix;
 #   4. with PYTHON set (the module was built): `import cullide` from the installed package, whose
 #      data folder is the prefix's.
@@ -43,6 +43,12 @@ execute_process(COMMAND ${prefix}/bin/cullide make-scene cows --triangles 500 -o
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(rc EQUAL 0 OR NOT err MATCHES "${prefix}/share/cullide/data/meshes/cow.off")
   message(FATAL_ERROR "without the installed cow.off, make-scene should fail naming it (exit ${rc}): ${out}${err}")
+endif()
+
+# The installed plot script is found (the command checks for it before its inputs).
+execute_process(COMMAND ${prefix}/bin/cullide plot ${WORK_DIR}/missing.csv RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT err MATCHES "missing.csv: no such file")
+  message(FATAL_ERROR "installed cullide plot does not find ${prefix}/share/cullide/tools/plot.py: ${err}")
 endif()
 
 # 3. pkg-config.

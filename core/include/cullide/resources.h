@@ -4,10 +4,12 @@
 // Conventions (the first that applies):
 //   1. setResourceDir(dir) was called (the Python module does, from its own location);
 //   2. the environment variable CULLIDE_RESOURCE_DIR is set;
-//   3. the running executable (/proc/self/exe) lies inside the build tree it was built in: the
-//      source tree (a build-tree `cullide` and the tests use the checkout's data);
-//   4. otherwise <executable's folder>/../share/cullide, where `cmake --install` puts them: an
-//      installed command never reads the source tree, even when that still exists.
+//   3. <executable's folder>/../share/cullide exists (/proc/self/exe): there, where
+//      `cmake --install` puts them; an installed command never reads the source tree, even when
+//      that still exists;
+//   4. the executable lies inside the build tree it was built in: the source tree (a build-tree
+//      `cullide` and the tests use the checkout's data);
+//   5. otherwise <executable's folder>/../share/cullide all the same (errors then name files there).
 #pragma once
 
 #include <filesystem>
