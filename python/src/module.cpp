@@ -28,7 +28,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -347,6 +349,12 @@ Vec3d vec3(const py::handle& obj, const std::string& name) {
     return {v[0], v[1], v[2]};
 }
 
+// A draw range bound from Python: 0..2^32-1 (CommandList then checks that first + count fits).
+uint32_t rangeValue(long long v, const std::string& name) {
+    if (v < 0 || v > 0xffffffffLL) fail(name + ": " + std::to_string(v) + " is not 0..4294967295");
+    return uint32_t(v);
+}
+
 // The CPU reference backend with its geometry kept, so that set_geometry's validation covers
 // every later draw range check (the backend's own execute() checks ranges).
 struct PyCpuBackend {
@@ -565,11 +573,21 @@ PYBIND11_MODULE(_cullide, m) {
             "begin_query", [](CommandList& l, const std::string& k) { return l.beginQuery(parseQueryKind(k)); },
             py::arg("kind") = "samples", "Opens a query ('samples' or 'any'); returns its index.")
         .def("end_query", &CommandList::endQuery, "Closes the open query.")
-        .def("draw", &CommandList::draw, py::arg("first"), py::arg("count"),
-             "Draws triangles [first, first+count) of the geometry.")
+        .def(
+            "draw",
+            [](CommandList& l, long long first, long long count) {
+                l.draw(rangeValue(first, "draw: first"), rangeValue(count, "draw: count"));
+            },
+            py::arg("first"), py::arg("count"), "Draws triangles [first, first+count) of the geometry.")
         .def("clear_intervals", &CommandList::clearIntervals, "Conservative mode: empties the interval buffer.")
-        .def("draw_conservative", &CommandList::drawConservative, py::arg("first"), py::arg("count"), py::arg("test"),
-             py::arg("write"), "Conservative mode: rasterizes [first, first+count) conservatively.")
+        .def(
+            "draw_conservative",
+            [](CommandList& l, long long first, long long count, bool test, bool write) {
+                l.drawConservative(rangeValue(first, "draw_conservative: first"),
+                                   rangeValue(count, "draw_conservative: count"), test, write);
+            },
+            py::arg("first"), py::arg("count"), py::arg("test"), py::arg("write"),
+            "Conservative mode: rasterizes [first, first+count) conservatively.")
         .def_property_readonly("query_count", &CommandList::queryCount, "Queries begun so far.")
         .def("reset", &CommandList::reset, "Empties the list.")
         .def("__len__", [](const CommandList& l) { return l.commands().size(); });

@@ -287,6 +287,12 @@ def test_cpu_backend_and_command_list():
         b.execute(bad)
     with pytest.raises(ValueError):
         cullide.CommandList().end_query()
+    with pytest.raises(ValueError, match="first"):
+        cullide.CommandList().draw(-1, 2)
+    with pytest.raises(ValueError, match="count"):
+        cullide.CommandList().draw_conservative(0, 2**40, True, False)
+    with pytest.raises(ValueError, match="clear depth"):
+        cullide.CommandList().clear(float("nan"))
     with pytest.raises(ValueError, match="set_view"):
         cullide.CpuBackend().execute(cullide.CommandList())
     with pytest.raises(ValueError, match="box"):
