@@ -387,7 +387,7 @@ TEST(Cli, JsonOutputsCarryProvenance) {
     const fs::path d = freshDir("provenance");
     const std::string scene = quote(kData + "/scenes/bunny_through_cow.json");
     const std::regex date(R"(\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}Z)");
-    // The commit as `cullide --version` says it: "cullide 0.1.0 (commit <hash>; Embree ...)".
+    // The commit as `cullide --version` says it: "cullide 0.2.0 (commit <hash>; Embree ...)".
     const CliRun v = runCli("--version");
     ASSERT_EQ(v.status, 0) << v.output;
     std::smatch m;

@@ -20,6 +20,8 @@ packages=(
   libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
   # charts
   python3 python3-matplotlib python3-numpy
+  # the Python module (python/) and its tests
+  pybind11-dev python3-dev python3-pytest
 )
 
 missing=()

@@ -5,6 +5,7 @@
 #include "cullide/error.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
+#include "cullide/resources.h"
 #include "cullide/scene_io.h"
 
 #include <chrono>
@@ -12,10 +13,6 @@
 #include <filesystem>
 #include <map>
 #include <string>
-
-#ifndef CULLIDE_DATA_DIR
-#define CULLIDE_DATA_DIR "data"
-#endif
 
 namespace cullide::cli {
 namespace {
@@ -34,7 +31,7 @@ struct MakeSceneOptions {
 };
 
 std::string defaultMesh(Kind k) {
-    const std::string dir = CULLIDE_DATA_DIR "/meshes/";
+    const std::string dir = (dataDir() / "meshes").string() + "/";
     return k == Kind::Cows ? dir + "cow.off" : dir + "bunny.off";
 }
 

@@ -3,6 +3,7 @@
 #include "commands.h"
 
 #include "cullide/error.h"
+#include "cullide/resources.h"
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -19,15 +20,11 @@ struct PlotOptions {
     std::string python;
 };
 
-// tools/plot.py: $CULLIDE_PLOT_SCRIPT, else beside the executable's source tree (compile-time
-// CULLIDE_SOURCE_DIR), else ../share/cullide/plot.py next to the executable.
+// tools/plot.py: $CULLIDE_PLOT_SCRIPT, else under the resource root (resources.h: the source tree
+// for a build-tree executable, ../share/cullide beside an installed one).
 std::filesystem::path plotScript() {
     if (const char* env = std::getenv("CULLIDE_PLOT_SCRIPT")) return env;
-    const std::filesystem::path source = std::filesystem::path(CULLIDE_SOURCE_DIR) / "tools" / "plot.py";
-    if (std::filesystem::exists(source)) return source;
-    std::error_code ec;
-    const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-    return exe.parent_path() / ".." / "share" / "cullide" / "plot.py";
+    return resourceDir() / "tools" / "plot.py";
 }
 
 int runPlot(const PlotOptions& o) {

@@ -2,7 +2,7 @@
 // (prune --json, oracle --json, info --json, each study record, the benchmarks' context), so
 // that a number can be traced to the build, the machine and the run that produced it.
 //
-//   "provenance": {"cullide_version": "0.1.0", "git_commit": "<40 hex>[-dirty]" | "unknown",
+//   "provenance": {"cullide_version": "0.2.0", "git_commit": "<40 hex>[-dirty]" | "unknown",
 //                  "compiler": "GCC 12.2.0", "cpu_model": "...", "threads": 16,
 //                  "date": "2026-11-22T15:04:05Z", "drivers": ["..."]}
 //
@@ -17,7 +17,7 @@
 
 namespace cullide {
 
-// The project version ("0.1.0", from CMake's project(VERSION)).
+// The project version ("0.2.0", from CMake's project(VERSION)).
 const char* version();
 // The git commit the build was made from ("unknown" outside a git checkout), with "-dirty" when
 // the work tree had changes at build time. Regenerated on every build (core/cmake/git_commit.cmake).

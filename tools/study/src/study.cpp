@@ -10,6 +10,7 @@
 #include "cullide/mesh_io.h"
 #include "cullide/parallel.h"
 #include "cullide/provenance.h"
+#include "cullide/resources.h"
 #include "cullide/raster/backends.h"
 #include "cullide/scene_io.h"
 
@@ -35,7 +36,7 @@ double secondsSince(Clock::time_point t) {
 }
 
 std::string dataDir() {
-    return CULLIDE_DATA_DIR;
+    return cullide::dataDir().string();
 }
 
 // "name:a:b" split at ':' (a Windows drive letter is not a concern here).
