@@ -13,7 +13,7 @@
 #include "cullide/provenance.h"
 #include "cullide/raster/backends.h"
 #include "cullide/raster/cpu_backend.h"
-#include "cullide/raster/gl_backend.h"
+#include "cullide/raster/gpu_backend.h"
 #include "cullide/raster/png.h"
 #include "cullide/scene_io.h"
 
@@ -117,9 +117,10 @@ Json reportComparison(const raster::TraceReader& trace, const raster::TraceCompa
     const auto& all = c.all;
     std::printf("%s: %zu frame(s), %zu command list(s)\n  backend: %s\n", title.c_str(), trace.frameCount(),
                 trace.listCount(), backend.c_str());
-    std::printf("queries: %llu; exact %llu (%s), in interval %llu (%s), outside %llu\n", (unsigned long long)all.queries,
-                (unsigned long long)all.exact, percent(all.exact, all.queries).c_str(), (unsigned long long)all.inside,
-                percent(all.inside, all.queries).c_str(), (unsigned long long)(all.queries - all.inside));
+    std::printf("queries: %llu; exact %llu (%s), in interval %llu (%s), outside %llu\n",
+                (unsigned long long)all.queries, (unsigned long long)all.exact, percent(all.exact, all.queries).c_str(),
+                (unsigned long long)all.inside, percent(all.inside, all.queries).c_str(),
+                (unsigned long long)(all.queries - all.inside));
     uint64_t ambiguous = 0, width = 0;
     for (const raster::QueryComparison& q : c.queries) {
         ambiguous += q.interval.possible > q.interval.certain ? 1 : 0;
@@ -192,14 +193,13 @@ size_t writeComparisonPictures(const raster::TraceReader& trace, const raster::T
     std::map<size_t, uint32_t> wanted;  // list -> query, one per list
     for (size_t i : worst) wanted.emplace(c.queries[i].list, c.queries[i].query);
     size_t written = 0;
-    raster::captureTraceQueries(trace, wanted,
-                                [&](const raster::TraceList& list, uint32_t q, const raster::CoverageCapture& cap) {
-                                    char name[96];
-                                    std::snprintf(name, sizeof name, "query_f%u_l%zu_q%u.png", list.frame, list.index,
-                                                  q);
-                                    writeQueryPng(cap, list.view, std::filesystem::path(folder) / name);
-                                    ++written;
-                                });
+    raster::captureTraceQueries(
+        trace, wanted, [&](const raster::TraceList& list, uint32_t q, const raster::CoverageCapture& cap) {
+            char name[96];
+            std::snprintf(name, sizeof name, "query_f%u_l%zu_q%u.png", list.frame, list.index, q);
+            writeQueryPng(cap, list.view, std::filesystem::path(folder) / name);
+            ++written;
+        });
     return written;
 }
 
@@ -218,16 +218,17 @@ int runRecord(const RecordOptions& o) {
     const Animation animation = loadScene(o.scene);
     const auto [first, last] = selectFrames(animation, o.frame, o.scene);
     const auto start = std::chrono::steady_clock::now();
-    const Recording r = recordTrace(animation, first, last, options, o.rules, o.threads, o.out,
-                                    workloadJson(o.scene, options));
+    const Recording r =
+        recordTrace(animation, first, last, options, o.rules, o.threads, o.out, workloadJson(o.scene, options));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const raster::TraceReader trace(o.out);
     const Json& s = trace.header()["summary"];
-    std::printf("%s: %zu frame(s), %llu command list(s), %llu commands, %llu queries, %llu triangles drawn; "
-                "%.2f MB in %.2f s\n",
-                o.out.c_str(), trace.frameCount(), (unsigned long long)s["lists"].get<uint64_t>(),
-                (unsigned long long)s["commands"].get<uint64_t>(), (unsigned long long)s["queries"].get<uint64_t>(),
-                (unsigned long long)s["triangles_drawn"].get<uint64_t>(), double(r.bytes) / 1e6, seconds);
+    std::printf(
+        "%s: %zu frame(s), %llu command list(s), %llu commands, %llu queries, %llu triangles drawn; "
+        "%.2f MB in %.2f s\n",
+        o.out.c_str(), trace.frameCount(), (unsigned long long)s["lists"].get<uint64_t>(),
+        (unsigned long long)s["commands"].get<uint64_t>(), (unsigned long long)s["queries"].get<uint64_t>(),
+        (unsigned long long)s["triangles_drawn"].get<uint64_t>(), double(r.bytes) / 1e6, seconds);
     if (r.referenceOutside > 0) {
         std::fprintf(stderr,
                      "cullide: warning: %llu of %llu reference counts lie outside their own intervals (a bug in "
@@ -257,12 +258,13 @@ int runReplay(const ReplayOptions& o) {
     } else {
         backend = raster::makeBackend(o.backend, o.threads);
         drivers.push_back(backend->describe());
-        if (const auto* gl = dynamic_cast<const raster::GlBackend*>(backend.get());
-            gl && gl->info().subpixelBits < trace.rules().otherSubpixelBits)
+        if (const auto* gpu = dynamic_cast<const raster::GpuBackend*>(backend.get());
+            gpu && gpu->subpixelBits() < trace.rules().otherSubpixelBits)
             std::fprintf(stderr,
-                         "cullide: warning: the GL has %d subpixel bits; the trace's intervals allow for %d or more "
-                         "(record with --other-subpixel-bits %d)\n",
-                         gl->info().subpixelBits, trace.rules().otherSubpixelBits, gl->info().subpixelBits);
+                         "cullide: warning: the %s backend has %d subpixel bits; the trace's intervals allow for %d or "
+                         "more (record with --other-subpixel-bits %d)\n",
+                         gpu->apiName().c_str(), gpu->subpixelBits(), trace.rules().otherSubpixelBits,
+                         gpu->subpixelBits());
     }
     const auto start = std::chrono::steady_clock::now();
     raster::TraceResults results;
@@ -392,10 +394,12 @@ void addTraceCommand(CLI::App& app, Action& action) {
     });
 
     auto p = std::make_shared<ReplayOptions>();
-    CLI::App* rep = trace->add_subcommand("replay", "Execute a trace's command lists on a backend and write its answers");
+    CLI::App* rep =
+        trace->add_subcommand("replay", "Execute a trace's command lists on a backend and write its answers");
     rep->add_option("trace", p->trace, "The trace file")->required();
     rep->add_option("--backend", p->backend,
-                    "cpu (the reference, under the trace's rules) | gl (OpenGL 4.5 through headless EGL)")
+                    "cpu (the reference, under the trace's rules) | gl (OpenGL 4.5 through headless EGL) | vulkan "
+                    "(Vulkan 1.1+, headless)")
         ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
     rep->add_option("-o,--out", p->out, "The results file to write (JSON)")->required();
@@ -409,7 +413,8 @@ void addTraceCommand(CLI::App& app, Action& action) {
 
     auto c = std::make_shared<CompareOptions>();
     CLI::App* cmp = trace->add_subcommand(
-        "compare", "Judge a results file against a trace: exact, in interval or outside, per query (exit 1 if outside)");
+        "compare",
+        "Judge a results file against a trace: exact, in interval or outside, per query (exit 1 if outside)");
     cmp->add_option("trace", c->trace, "The trace file")->required();
     cmp->add_option("results", c->results, "The results file (JSON: {\"backend\", \"results\"})")->required();
     cmp->add_option("--json", c->json, "Write the verdict as JSON");
