@@ -225,7 +225,9 @@ TEST_P(VulkanFormats, SamplesPassedOfRandomTrianglesAgreeExactly) {
 // equal depth under LESS it passes nowhere; a full-screen quad behind it passes on the other 2080;
 // in front, on all 4096. Also the tie direction on horizontal and vertical edges through pixel
 // centres (bottom and left included, as in llvmpipe's GL FBOs and the reference): a viewport flipped
-// with a negative height turns Vulkan's top-left rule into GL's top-left and fails here.
+// with a negative height turns Vulkan's top-left rule into GL's top-left. Tried on lavapipe: the
+// triangle on a horizontal bottom edge then covers 123 pixels instead of 143, and the rectangle
+// keeps its count (100) but moves from rows 20..24 to rows 21..25.
 TEST_P(VulkanFormats, HalfScreenTriangleAndEdgesThroughPixelCentres) {
     VULKAN_OR_SKIP();
     const DepthFormat f = GetParam();
@@ -234,6 +236,8 @@ TEST_P(VulkanFormats, HalfScreenTriangleAndEdgesThroughPixelCentres) {
     addQuad(p, t, 0, 0, 64, 64, 0.75f);  // tris 1-2
     addQuad(p, t, 0, 0, 64, 64, 0.25f);  // tris 3-4
     addQuad(p, t, 10.5f, 20.5f, 30.5f, 25.5f, 0.5f);  // tris 5-6: all four edges through centres
+    p.push_back({20.25f, 33.75f, 0.5f});  // tri 7: on the rectangle's bottom edge, apex off-centre
+    t.push_back({11, 12, 15});  // (10.5, 20.5), (30.5, 20.5), the apex
     const OrthoView view = identityView(64, 64, f);
     CommandList list;
     list.beginQuery();
@@ -254,11 +258,14 @@ TEST_P(VulkanFormats, HalfScreenTriangleAndEdgesThroughPixelCentres) {
     list.beginQuery();
     list.draw(5, 2);
     list.endQuery();
+    list.beginQuery();
+    list.draw(7, 1);
+    list.endQuery();
     std::unique_ptr<VulkanBackend> vk = makeValidated();
     vk->setGeometry(p, t);
     vk->setView(view);
     const std::vector<uint64_t> r = vk->execute(list);
-    EXPECT_EQ(r, (std::vector<uint64_t>{2016, 0, 2080, 4096, 20 * 5}));
+    EXPECT_EQ(r, (std::vector<uint64_t>{2016, 0, 2080, 4096, 20 * 5, 143}));
     std::unique_ptr<raster::CpuBackend> cpu = raster::makeCpuBackend();
     cpu->setGeometry(p, t);
     cpu->setView(view);
