@@ -258,6 +258,7 @@ TEST_P(VulkanFormats, HalfScreenTriangleAndEdgesThroughPixelCentres) {
     list.beginQuery();
     list.draw(5, 2);
     list.endQuery();
+    list.clear();
     list.beginQuery();
     list.draw(7, 1);
     list.endQuery();
