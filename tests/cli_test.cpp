@@ -193,7 +193,7 @@ TEST(Cli, PruneRefusesBadOptions) {
         {"--branching 1", "--branching"},
         {"--threads -1", "--threads"},
         {"--frame 3", "--frame"},
-        {"--backend vulkan", "--backend"},
+        {"--backend metal", "--backend"},
     };
     for (const auto& [args, needle] : cases) {
         const CliRun r = runCli("prune " + scene + " " + args);

@@ -18,6 +18,11 @@ packages=(
   libstb-dev
   # GL backend: libepoxy for loading, headless EGL with Mesa (llvmpipe when there is no GPU)
   libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
+  # Vulkan backend: the loader and headers, Mesa's lavapipe (a Vulkan CPU device when there is no
+  # GPU), the Khronos validation layer (on in the tests) and glslangValidator (shaders compiled at
+  # build time). mesa-vulkan-drivers pulls Mesa's GL packages above up to its own point release
+  # (llvmpipe changes with it), so both are installed together, in one apt-get call.
+  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
   # charts
   python3 python3-matplotlib python3-numpy
   # the Python module (python/) and its tests

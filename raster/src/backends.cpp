@@ -1,15 +1,16 @@
-// The depth backends by name (see backends.h); in a build without GL, the GL entry points that
-// say so.
+// The depth backends by name (see backends.h); in a build without GL or Vulkan, their entry points
+// that say so.
 #include "cullide/raster/backends.h"
 
 #include "cullide/error.h"
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/raster/gl_backend.h"
+#include "cullide/raster/vulkan_backend.h"
 
 namespace cullide::raster {
 
 const std::vector<std::string>& backendNames() {
-    static const std::vector<std::string> names{"cpu", "gl"};
+    static const std::vector<std::string> names{"cpu", "gl", "vulkan"};
     return names;
 }
 
@@ -30,6 +31,21 @@ bool glBuilt() {
     return CULLIDE_GL;
 }
 
+bool vulkanBuilt() {
+    return CULLIDE_VULKAN;
+}
+
+const std::vector<std::string>& gpuBackendNames() {
+    static const std::vector<std::string> names{"gl", "vulkan"};
+    return names;
+}
+
+std::unique_ptr<GpuBackend> makeGpuBackend(const std::string& name) {
+    if (name == "gl") return makeGlBackend();
+    if (name == "vulkan") return makeVulkanBackend();
+    throw InputError("backend", "'" + name + "': gl or vulkan");
+}
+
 std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads) {
     if (name == "cpu") {
         CpuBackendOptions o;
@@ -37,6 +53,7 @@ std::unique_ptr<DepthBackend> makeBackend(const std::string& name, int threads) 
         return makeCpuBackend(o);
     }
     if (name == "gl") return makeGlBackend();
+    if (name == "vulkan") return makeVulkanBackend();
     throw InputError("backend", "'" + name + "': " + backendNameList());
 }
 
@@ -48,6 +65,18 @@ std::unique_ptr<GlBackend> makeGlBackend(const GlBackendOptions&) {
 
 bool glBackendAvailable(std::string* why, const GlBackendOptions&) {
     if (why) *why = kGlNotBuilt;
+    return false;
+}
+#endif
+
+#if !CULLIDE_VULKAN
+// Built without raster/vulkan/ (-DCULLIDE_VULKAN=OFF): the Vulkan backend's entry points say so.
+std::unique_ptr<VulkanBackend> makeVulkanBackend(const VulkanBackendOptions&) {
+    throw BackendUnavailable(kVulkanNotBuilt, "vulkan backend");
+}
+
+bool vulkanBackendAvailable(std::string* why, const VulkanBackendOptions&) {
+    if (why) *why = kVulkanNotBuilt;
     return false;
 }
 #endif

@@ -131,7 +131,7 @@ int runPrune(const PruneOptions& o) {
                                     {"objects", objects},
                                     {"frames", frames}};
         for (const Vec3d& d : options.directions) j["options"]["directions"].push_back({d.x(), d.y(), d.z()});
-        // The GL backend's description names its driver; the CPU reference rasterizer has none.
+        // The GL and Vulkan backends' descriptions name their driver; the CPU reference rasterizer has none.
         std::vector<std::string> drivers;
         if (o.backend != "cpu") drivers.push_back(backend->describe());
         j["provenance"] = toJson(provenance(o.threads, drivers));
@@ -148,7 +148,9 @@ void addPruneCommand(CLI::App& app, Action& action) {
         app.add_subcommand("prune", "Compute the potentially colliding set (PCS) of every frame of a scene");
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
     addCullideOptions(sub, o->cullide);
-    sub->add_option("--backend", o->backend, "cpu (the reference rasterizer) | gl (OpenGL 4.5 through headless EGL)")
+    sub->add_option(
+           "--backend", o->backend,
+           "cpu (the reference rasterizer) | gl (OpenGL 4.5 through headless EGL) | vulkan (Vulkan 1.1+, headless)")
         ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
     sub->add_option("--threads", o->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));

@@ -120,11 +120,13 @@ int runStudyCommand(const StudyCliOptions& o) {
     if (!o.stability.empty()) return runStability(o);
     study::StudyOptions so;
     so.spec = buildSpec(o);
-    // The sweep is a product, so gl runs get every thread count too; say that they ignore it.
+    // The sweep is a product, so gl and vulkan runs get every thread count too; say that they ignore it.
     const auto& sp = so.spec;
-    const bool gl = std::find(sp.backends.begin(), sp.backends.end(), "gl") != sp.backends.end();
-    if (gl && std::any_of(sp.threads.begin(), sp.threads.end(), [](int t) { return t != 0; }))
-        std::fprintf(stderr, "cullide: warning: threads apply to the cpu backend only; the gl runs ignore them\n");
+    const bool gpu =
+        std::any_of(sp.backends.begin(), sp.backends.end(), [](const std::string& b) { return b != "cpu"; });
+    if (gpu && std::any_of(sp.threads.begin(), sp.threads.end(), [](int t) { return t != 0; }))
+        std::fprintf(stderr,
+                     "cullide: warning: threads apply to the cpu backend only; the gl and vulkan runs ignore them\n");
     if (!o.shard.empty()) so.shard = study::parseShard(o.shard);
     so.out = o.out;
     so.progress = !o.quiet && isatty(2);

@@ -13,7 +13,7 @@
 #include "cullide/provenance.h"
 #include "cullide/raster/backends.h"
 #include "cullide/raster/cpu_backend.h"
-#include "cullide/raster/gl_backend.h"
+#include "cullide/raster/gpu_backend.h"
 #include "cullide/raster/png.h"
 #include "cullide/scene_io.h"
 
@@ -258,12 +258,13 @@ int runReplay(const ReplayOptions& o) {
     } else {
         backend = raster::makeBackend(o.backend, o.threads);
         drivers.push_back(backend->describe());
-        if (const auto* gl = dynamic_cast<const raster::GlBackend*>(backend.get());
-            gl && gl->info().subpixelBits < trace.rules().otherSubpixelBits)
+        if (const auto* gpu = dynamic_cast<const raster::GpuBackend*>(backend.get());
+            gpu && gpu->subpixelBits() < trace.rules().otherSubpixelBits)
             std::fprintf(stderr,
-                         "cullide: warning: the GL has %d subpixel bits; the trace's intervals allow for %d or more "
-                         "(record with --other-subpixel-bits %d)\n",
-                         gl->info().subpixelBits, trace.rules().otherSubpixelBits, gl->info().subpixelBits);
+                         "cullide: warning: the %s backend has %d subpixel bits; the trace's intervals allow for %d or "
+                         "more (record with --other-subpixel-bits %d)\n",
+                         gpu->apiName().c_str(), gpu->subpixelBits(), trace.rules().otherSubpixelBits,
+                         gpu->subpixelBits());
     }
     const auto start = std::chrono::steady_clock::now();
     raster::TraceResults results;
@@ -397,7 +398,8 @@ void addTraceCommand(CLI::App& app, Action& action) {
         trace->add_subcommand("replay", "Execute a trace's command lists on a backend and write its answers");
     rep->add_option("trace", p->trace, "The trace file")->required();
     rep->add_option("--backend", p->backend,
-                    "cpu (the reference, under the trace's rules) | gl (OpenGL 4.5 through headless EGL)")
+                    "cpu (the reference, under the trace's rules) | gl (OpenGL 4.5 through headless EGL) | vulkan "
+                    "(Vulkan 1.1+, headless)")
         ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
     rep->add_option("-o,--out", p->out, "The results file to write (JSON)")->required();

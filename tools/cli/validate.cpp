@@ -1,9 +1,10 @@
-// `cullide validate SCENE`: the same Cullide workload on the CPU reference and on GL, every query
-// compared: record a trace on the reference (with the intervals [certain, certain + ambiguous] of
-// cullide/raster/validate.h), replay it on GL, compare (docs/trace-format.md, docs/gl-backend.md)
-// - `trace record`, `trace replay --backend gl` and `trace compare` in one process - and then
-// the final PCS of Cullide run on GL against the reference's. Exit status 1 when any query falls
-// outside its interval.
+// `cullide validate SCENE [--backend gl|vulkan]`: the same Cullide workload on the CPU reference and
+// on a GPU backend (GL by default, or Vulkan), every query compared: record a trace on the
+// reference (with the intervals [certain, certain + ambiguous] of cullide/raster/validate.h),
+// replay it on the GPU backend, compare (docs/trace-format.md, docs/gl-backend.md,
+// docs/vulkan-backend.md) - `trace record`, `trace replay --backend gl|vulkan` and `trace compare`
+// in one process - and then the final PCS of Cullide run on that backend against the reference's.
+// Exit status 1 when any query falls outside its interval.
 #include "commands.h"
 #include "trace.h"
 
@@ -12,7 +13,7 @@
 #include "cullide/file_io.h"
 #include "cullide/options.h"
 #include "cullide/provenance.h"
-#include "cullide/raster/gl_backend.h"
+#include "cullide/raster/backends.h"
 #include "cullide/raster/trace.h"
 #include "cullide/scene_io.h"
 
@@ -32,6 +33,7 @@ struct ValidateOptions {
     OptionText cullide;  // method, resolution, depth, directions, hierarchy (cullide/options.h)
     long frame = -1;
     std::string png, json, trace;
+    std::string backend = "gl";
     size_t worst = 10;
     double depthLsb = 2.0;
 };
@@ -51,26 +53,29 @@ int runValidate(const ValidateOptions& o) {
     const Animation animation = loadScene(o.scene);
     const auto [first, last] = selectFrames(animation, o.frame, o.scene);
 
-    const std::unique_ptr<raster::GlBackend> gl = raster::makeGlBackend();
-    const DepthFormat effective = gl->effectiveFormat(options.depth);
+    const std::unique_ptr<raster::GpuBackend> gpu = raster::makeGpuBackend(o.backend);
+    // "GL" or "Vulkan" in messages; the backend's name ("gl", "vulkan") in the PCS lines and keys.
+    const std::string api = o.backend == "gl" ? "GL" : "Vulkan", name = gpu->apiName();
+    const DepthFormat effective = gpu->effectiveFormat(options.depth);
     if (!(effective == options.depth)) {
-        std::fprintf(stderr, "cullide: warning: GL has no %s; both backends use %s\n", options.depth.name().c_str(),
-                     effective.name().c_str());
+        std::fprintf(stderr, "cullide: warning: %s has no %s; both backends use %s\n", api.c_str(),
+                     options.depth.name().c_str(), effective.name().c_str());
         options.depth = effective;
     }
-    // The reference configured like the GL: its subpixel bits (llvmpipe: 8) and llvmpipe's
-    // bottom-left fill rule; the intervals allow for the GL's own subpixel bits.
+    // The reference configured like the GPU backend: its subpixel bits (llvmpipe and lavapipe: 8)
+    // and llvmpipe's bottom-left fill rule (lavapipe's too, as framebuffer rows are GL's window
+    // rows: docs/vulkan-backend.md); the intervals allow for the backend's own subpixel bits.
     raster::TraceRules rules;
-    rules.subpixelBits = std::clamp(gl->info().subpixelBits, raster::kMinSubpixelBits, raster::kMaxSubpixelBits);
+    rules.subpixelBits = std::clamp(gpu->subpixelBits(), raster::kMinSubpixelBits, raster::kMaxSubpixelBits);
     rules.fillRule = raster::FillRule::BottomLeft;
-    rules.otherSubpixelBits = std::max(1, gl->info().subpixelBits);
+    rules.otherSubpixelBits = std::max(1, gpu->subpixelBits());
     rules.depthLsb = o.depthLsb;
 
     std::printf(
         "%s: %s, %dx%d, %s, %zu direction(s)\n  reference: cpu reference (%d subpixel bits, %s)\n"
         "  other:     %s\n",
         o.scene.c_str(), toString(options.method), options.width, options.height, options.depth.name().c_str(),
-        options.directions.size(), rules.subpixelBits, raster::toString(rules.fillRule), gl->describe().c_str());
+        options.directions.size(), rules.subpixelBits, raster::toString(rules.fillRule), gpu->describe().c_str());
 
     // 1. Record on the reference.
     ScratchTrace scratch;
@@ -84,34 +89,35 @@ int runValidate(const ValidateOptions& o) {
     const raster::TraceReader trace(scratch.path);
     if (scratch.keep) std::printf("trace: %s (%.2f MB)\n", scratch.path.c_str(), double(recording.bytes) / 1e6);
 
-    // 2. Replay on GL; 3. compare.
+    // 2. Replay on the GPU backend; 3. compare.
     raster::TraceResults results;
-    results.backend = gl->describe();
-    results.results = raster::replayTrace(trace, *gl);
-    const raster::TraceComparison comparison = raster::compareTrace(trace, results, "gl results");
+    results.backend = gpu->describe();
+    results.results = raster::replayTrace(trace, *gpu);
+    const raster::TraceComparison comparison = raster::compareTrace(trace, results, name + " results");
     nlohmann::ordered_json report = reportComparison(trace, comparison, results.backend, o.worst,
-                                                     toJson(provenance(0, {gl->describe()})), "replayed on GL");
+                                                     toJson(provenance(0, {gpu->describe()})), "replayed on " + api);
     std::printf("reference self-check: %llu of %llu reference counts outside their own intervals\n",
                 (unsigned long long)recording.referenceOutside, (unsigned long long)recording.queries);
 
-    // 4. The PCS of Cullide run on GL itself, against the reference's.
+    // 4. The PCS of Cullide run on the GPU backend itself, against the reference's.
     size_t pcsDiffering = 0;
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
     for (size_t f = first; f < last; ++f) {
         const std::vector<PcsTriangle>& ref = recording.pcs[f - first];
-        const CullideResult oth = runCullide(animation.sceneAt(f), *gl, options);
+        const CullideResult oth = runCullide(animation.sceneAt(f), *gpu, options);
         std::vector<PcsTriangle> onlyRef, onlyGl;
         std::set_difference(ref.begin(), ref.end(), oth.pcs.begin(), oth.pcs.end(), std::back_inserter(onlyRef));
         std::set_difference(oth.pcs.begin(), oth.pcs.end(), ref.begin(), ref.end(), std::back_inserter(onlyGl));
         const bool same = onlyRef.empty() && onlyGl.empty();
-        std::printf("frame %zu: PCS reference %zu, gl %zu triangles; %s (%zu only in the reference, %zu only in gl)\n",
-                    f, ref.size(), oth.pcs.size(), same ? "identical" : "DIFFERENT", onlyRef.size(), onlyGl.size());
+        std::printf("frame %zu: PCS reference %zu, %s %zu triangles; %s (%zu only in the reference, %zu only in %s)\n",
+                    f, ref.size(), name.c_str(), oth.pcs.size(), same ? "identical" : "DIFFERENT", onlyRef.size(),
+                    onlyGl.size(), name.c_str());
         pcsDiffering += same ? 0 : 1;
         frames.push_back({{"frame", f},
                           {"pcs_reference", ref.size()},
-                          {"pcs_gl", oth.pcs.size()},
+                          {"pcs_" + name, oth.pcs.size()},
                           {"only_reference", onlyRef.size()},
-                          {"only_gl", onlyGl.size()}});
+                          {"only_" + name, onlyGl.size()}});
     }
     std::printf("frames with a different final PCS: %zu of %zu\n", pcsDiffering, last - first);
 
@@ -141,9 +147,13 @@ int runValidate(const ValidateOptions& o) {
 void addValidateCommand(CLI::App& app, Action& action) {
     auto o = std::make_shared<ValidateOptions>();
     CLI::App* sub = app.add_subcommand(
-        "validate", "Run the same Cullide workload on the CPU reference and on GL and compare every query");
+        "validate", "Run the same Cullide workload on the CPU reference and on GL or Vulkan and compare every query");
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
     addCullideOptions(sub, o->cullide);
+    sub->add_option("--backend", o->backend,
+                    "The backend validated: gl (OpenGL 4.5 through headless EGL) | vulkan (Vulkan 1.1+, headless)")
+        ->check(CLI::IsMember(raster::gpuBackendNames()))
+        ->capture_default_str();
     sub->add_option("--frame", o->frame, "Validate only this frame (default: every frame)")
         ->check(CLI::NonNegativeNumber);
     sub->add_option("--png", o->png, "Write difference pictures of the worst queries' coverage into this folder");

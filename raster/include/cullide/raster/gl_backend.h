@@ -30,8 +30,7 @@
 //     use one backend from one thread at a time.
 #pragma once
 
-#include "cullide/depth_backend.h"
-#include "cullide/error.h"
+#include "cullide/raster/gpu_backend.h"
 
 #include <functional>
 #include <memory>
@@ -39,13 +38,9 @@
 
 namespace cullide::raster {
 
-// No GL context could be made (no EGL library, no display or device, no OpenGL 4.5 core). An
-// InputError with source "gl backend", so the command line prints it and exits 2; the message
-// says why, for every platform tried.
-class BackendUnavailable : public InputError {
-public:
-    explicit BackendUnavailable(const std::string& cause) : InputError("gl backend", cause) {}
-};
+// makeGlBackend() throws BackendUnavailable (gpu_backend.h, source "gl backend") when no GL
+// context can be made (no EGL library, no display or device, no OpenGL 4.5 core), saying why for
+// every platform tried.
 
 struct GlBackendOptions {
     enum class Platform : uint8_t {
@@ -71,12 +66,13 @@ struct GlInfo {
     bool hasUnorm32 = false;  // GL_DEPTH_COMPONENT32 is renderable
 };
 
-class GlBackend : public DepthBackend {
+class GlBackend : public GpuBackend {
 public:
     ~GlBackend() override = default;
     virtual const GlInfo& info() const = 0;
-    // The depth format GL stores for a requested one (see the conventions).
-    virtual DepthFormat effectiveFormat(const DepthFormat& requested) const = 0;
+    std::string apiName() const override { return "gl"; }
+    int subpixelBits() const override { return info().subpixelBits; }
+    // effectiveFormat(): the depth format GL stores for a requested one (see the conventions).
     // Depth bits of the current framebuffer as GL reports them (GL_RENDERBUFFER_DEPTH_SIZE);
     // 0 before the first setView().
     virtual int depthBits() const = 0;
