@@ -30,6 +30,9 @@ install(FILES ${PROJECT_BINARY_DIR}/cullideConfig.cmake ${PROJECT_BINARY_DIR}/cu
 if(CULLIDE_GL)
   set(CULLIDE_PC_GL_LIBS "-lepoxy -l${CMAKE_DL_LIBS}")
 endif()
+if(CULLIDE_VULKAN)
+  string(APPEND CULLIDE_PC_GL_LIBS " -lvulkan")  # the Vulkan backend links the loader
+endif()
 # The .pc file is relocatable (prefix from pkg-config's ${pcfiledir}), as `--install --prefix` may differ
 # from CMAKE_INSTALL_PREFIX.
 file(RELATIVE_PATH CULLIDE_PC_PREFIX /P/${CMAKE_INSTALL_LIBDIR}/pkgconfig /P)
