@@ -81,7 +81,6 @@ public:
     uint64_t finish();
 
 private:
-    struct Blob;
     nlohmann::ordered_json blob(const void* data, size_t bytes, const char* dtype, size_t rows, size_t cols);
 
     std::filesystem::path path_, scratchPath_;
