@@ -10,6 +10,7 @@
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/raster/gl_backend.h"
 #include "cullide/study/study.h"
+#include "window_geometry.h"
 
 #include <gtest/gtest.h>
 
@@ -18,6 +19,8 @@
 
 namespace cullide {
 namespace {
+
+using test::addQuad;
 
 using raster::GlBackend;
 
@@ -37,23 +40,6 @@ const std::string& glUnavailableReason() {
             GTEST_SKIP() << "no GL context: " << glUnavailableReason();                          \
         }                                                                                        \
     } while (0)
-
-// An axis-aligned quad at constant world z as two triangles (world = window in the views below).
-void addQuad(std::vector<Vec3f>& p, std::vector<Triangle>& t, float x0, float y0, float x1, float y1, float z) {
-    const uint32_t b = uint32_t(p.size());
-    p.insert(p.end(), {Vec3f(x0, y0, z), Vec3f(x1, y0, z), Vec3f(x1, y1, z), Vec3f(x0, y1, z)});
-    t.push_back({b, b + 1, b + 2});
-    t.push_back({b, b + 2, b + 3});
-}
-
-// A view whose window coordinates are the world's: x, y in [0, W] x [0, H], z in [0, 1].
-OrthoView identityView(int w, int h, const DepthFormat& f) {
-    OrthoView v;
-    v.xmin = 0, v.xmax = w, v.ymin = 0, v.ymax = h, v.znear = 0, v.zfar = 1;
-    v.width = w, v.height = h;
-    v.depth = f;
-    return v;
-}
 
 class GlFormats : public ::testing::TestWithParam<DepthFormat> {};
 
@@ -75,7 +61,7 @@ TEST_P(GlFormats, PixelAlignedDepthSeparatedBoxesAgreeExactly) {
     addQuad(p, t, 10, 2, 60, 20, 0.25f);  // tris 2-3: in front, partly overlapping
     addQuad(p, t, 20, 10, 50, 45, 0.75f);  // tris 4-5: behind
     addQuad(p, t, 0, 0, 64, 48, 0.5f);  // tris 6-7: the whole viewport at the occluder's depth
-    const OrthoView view = identityView(64, 48, f);
+    const OrthoView view = test::windowView(64, 48, f);
 
     std::unique_ptr<GlBackend> gl = raster::makeGlBackend();
     std::unique_ptr<raster::CpuBackend> cpu = raster::makeCpuBackend();
@@ -143,7 +129,7 @@ TEST_P(GlFormats, SamplesPassedOfRandomTrianglesAgreeExactly) {
         p.insert(p.end(), {a, b, c});
         t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
     }
-    const OrthoView view = identityView(64, 64, f);
+    const OrthoView view = test::windowView(64, 64, f);
     CommandList list;
     list.depthFunc(DepthFunc::Always);
     list.depthMask(false);
@@ -181,7 +167,7 @@ TEST(GlBackend, DescribeReportsRendererVersionSubpixelAndDepthBits) {
     EXPECT_FALSE(gl->info().renderer.empty());
     EXPECT_NE(gl->info().version.find("4."), std::string::npos);
     EXPECT_GE(gl->info().subpixelBits, 4);
-    gl->setView(identityView(8, 8, DepthFormat::unorm(24)));
+    gl->setView(test::windowView(8, 8, DepthFormat::unorm(24)));
     EXPECT_EQ(gl->depthBits(), 24);
     const std::string d = gl->describe();
     EXPECT_NE(d.find(gl->info().renderer), std::string::npos) << d;
@@ -202,13 +188,13 @@ TEST(GlBackend, UnavailableDepthFormatMapsToTheNearestWithAWarning) {
     EXPECT_EQ(gl->effectiveFormat(DepthFormat::unorm(16)), DepthFormat::unorm(16));
     EXPECT_EQ(gl->effectiveFormat(DepthFormat::unorm(20)), DepthFormat::unorm(24));
     EXPECT_EQ(gl->effectiveFormat(DepthFormat::float32()), DepthFormat::float32());
-    gl->setView(identityView(8, 8, DepthFormat::unorm(20)));
-    gl->setView(identityView(8, 8, DepthFormat::unorm(20)));
+    gl->setView(test::windowView(8, 8, DepthFormat::unorm(20)));
+    gl->setView(test::windowView(8, 8, DepthFormat::unorm(20)));
     ASSERT_EQ(warnings.size(), 1u);
     EXPECT_NE(warnings[0].find("D20"), std::string::npos) << warnings[0];
     EXPECT_EQ(gl->readDepth().format, DepthFormat::unorm(24));
     EXPECT_EQ(gl->readDepth().values[0], (1u << 24) - 1);  // a new buffer holds the far value
-    gl->setView(identityView(8, 8, DepthFormat::unorm(24)));
+    gl->setView(test::windowView(8, 8, DepthFormat::unorm(24)));
     EXPECT_EQ(warnings.size(), 1u);
 }
 
@@ -224,7 +210,7 @@ TEST(GlBackend, CommandListMisuseIsRefusedBeforeExecuting) {
     CommandList list;
     list.draw(1, 2);
     EXPECT_THROW(gl->execute(list), InputError);  // before setView
-    gl->setView(identityView(8, 8, DepthFormat::unorm(24)));
+    gl->setView(test::windowView(8, 8, DepthFormat::unorm(24)));
     EXPECT_THROW(gl->execute(list), InputError);  // triangles [1, 3) of 2
     CommandList ok;
     ok.beginQuery();
@@ -258,7 +244,7 @@ TEST(GlBackend, NoContextGivesAClearErrorAndTheCpuPathStillWorks) {
     std::vector<Triangle> t;
     addQuad(p, t, 0, 0, 4, 4, 0.5f);
     cpu->setGeometry(p, t);
-    cpu->setView(identityView(8, 8, DepthFormat::unorm(24)));
+    cpu->setView(test::windowView(8, 8, DepthFormat::unorm(24)));
     CommandList ok;
     ok.beginQuery();
     ok.draw(0, 2);

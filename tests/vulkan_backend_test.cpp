@@ -12,6 +12,7 @@
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/raster/vulkan_backend.h"
 #include "cullide/study/study.h"
+#include "window_geometry.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
@@ -27,6 +28,8 @@
 
 namespace cullide {
 namespace {
+
+using test::addQuad;
 
 using raster::VulkanBackend;
 
@@ -68,23 +71,6 @@ std::string validationText(const VulkanBackend& vk) {
 
 #define EXPECT_NO_VALIDATION_MESSAGES(vk) EXPECT_EQ((vk).validationMessages(), 0u) << validationText(vk)
 
-// An axis-aligned quad at constant world z as two triangles (world = window in the views below).
-void addQuad(std::vector<Vec3f>& p, std::vector<Triangle>& t, float x0, float y0, float x1, float y1, float z) {
-    const uint32_t b = uint32_t(p.size());
-    p.insert(p.end(), {Vec3f(x0, y0, z), Vec3f(x1, y0, z), Vec3f(x1, y1, z), Vec3f(x0, y1, z)});
-    t.push_back({b, b + 1, b + 2});
-    t.push_back({b, b + 2, b + 3});
-}
-
-// A view whose window coordinates are the world's: x, y in [0, W] x [0, H], z in [0, 1].
-OrthoView identityView(int w, int h, const DepthFormat& f) {
-    OrthoView v;
-    v.xmin = 0, v.xmax = w, v.ymin = 0, v.ymax = h, v.znear = 0, v.zfar = 1;
-    v.width = w, v.height = h;
-    v.depth = f;
-    return v;
-}
-
 class VulkanFormats : public ::testing::TestWithParam<DepthFormat> {};
 
 std::string formatName(const ::testing::TestParamInfo<DepthFormat>& info) {
@@ -108,7 +94,7 @@ TEST_P(VulkanFormats, PixelAlignedDepthSeparatedBoxesAgreeExactly) {
     addQuad(p, t, 20, 10, 50, 45, 0.75f);  // tris 4-5: behind
     addQuad(p, t, 0, 0, 64, 48, 0.5f);  // tris 6-7: the whole viewport at the occluder's depth
     addQuad(p, t, 0, 40, 16, 48, 0.125f);  // tris 8-9: top-left corner (a y flip would show)
-    const OrthoView view = identityView(64, 48, f);
+    const OrthoView view = test::windowView(64, 48, f);
 
     std::unique_ptr<VulkanBackend> vk = makeValidated();
     std::unique_ptr<raster::CpuBackend> cpu = raster::makeCpuBackend();
@@ -193,7 +179,7 @@ TEST_P(VulkanFormats, SamplesPassedOfRandomTrianglesAgreeExactly) {
         p.insert(p.end(), {a, b, c});
         t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
     }
-    const OrthoView view = identityView(64, 64, f);
+    const OrthoView view = test::windowView(64, 64, f);
     CommandList list;
     list.depthFunc(DepthFunc::Always);
     list.depthMask(false);
@@ -238,7 +224,7 @@ TEST_P(VulkanFormats, HalfScreenTriangleAndEdgesThroughPixelCentres) {
     addQuad(p, t, 10.5f, 20.5f, 30.5f, 25.5f, 0.5f);  // tris 5-6: all four edges through centres
     p.push_back({20.25f, 33.75f, 0.5f});  // tri 7: on the rectangle's bottom edge, apex off-centre
     t.push_back({11, 12, 15});  // (10.5, 20.5), (30.5, 20.5), the apex
-    const OrthoView view = identityView(64, 64, f);
+    const OrthoView view = test::windowView(64, 64, f);
     CommandList list;
     list.beginQuery();
     list.draw(0, 1);
@@ -297,7 +283,7 @@ TEST(VulkanBackend, DescribeNamesDeviceDriverAndFormat) {
     EXPECT_GE(vk->info().subpixelBits, 4);
     EXPECT_EQ(vk->subpixelBits(), vk->info().subpixelBits);
     EXPECT_EQ(vk->apiName(), "vulkan");
-    vk->setView(identityView(8, 8, DepthFormat::unorm(24)));
+    vk->setView(test::windowView(8, 8, DepthFormat::unorm(24)));
     const std::string d = vk->describe();
     EXPECT_NE(d.find(vk->info().device), std::string::npos) << d;
     EXPECT_NE(d.find(vk->info().driver), std::string::npos) << d;
@@ -319,15 +305,15 @@ TEST(VulkanBackend, UnavailableDepthFormatMapsToTheNearestWithAWarning) {
     EXPECT_EQ(vk->effectiveFormat(DepthFormat::unorm(20)), DepthFormat::unorm(24));
     EXPECT_EQ(vk->effectiveFormat(DepthFormat::unorm(32)), DepthFormat::unorm(24));
     EXPECT_EQ(vk->effectiveFormat(DepthFormat::float32()), DepthFormat::float32());
-    vk->setView(identityView(8, 8, DepthFormat::unorm(20)));
-    vk->setView(identityView(8, 8, DepthFormat::unorm(20)));
+    vk->setView(test::windowView(8, 8, DepthFormat::unorm(20)));
+    vk->setView(test::windowView(8, 8, DepthFormat::unorm(20)));
     ASSERT_EQ(warnings.size(), 1u);
     EXPECT_NE(warnings[0].find("D20"), std::string::npos) << warnings[0];
     EXPECT_EQ(vk->readDepth().format, DepthFormat::unorm(24));
     EXPECT_EQ(vk->readDepth().values[0], (1u << 24) - 1);  // a new buffer holds the far value
-    vk->setView(identityView(8, 8, DepthFormat::unorm(24)));
+    vk->setView(test::windowView(8, 8, DepthFormat::unorm(24)));
     EXPECT_EQ(warnings.size(), 1u);
-    vk->setView(identityView(8, 8, DepthFormat::float32()));
+    vk->setView(test::windowView(8, 8, DepthFormat::float32()));
     EXPECT_EQ(vk->readDepth().values[0], 0x3F800000u);  // 1.0f after a format change
     EXPECT_NO_VALIDATION_MESSAGES(*vk);
 }
@@ -347,7 +333,7 @@ TEST(VulkanBackend, CommandListMisuseIsRefusedBeforeExecuting) {
     list.draw(1, 2);
     EXPECT_THROW(vk->execute(list), InputError);  // before setView
     EXPECT_THROW(vk->readDepth(), InputError);
-    vk->setView(identityView(8, 8, DepthFormat::unorm(24)));
+    vk->setView(test::windowView(8, 8, DepthFormat::unorm(24)));
     EXPECT_THROW(vk->execute(list), InputError);  // triangles [1, 3) of 2
     CommandList conservative;
     conservative.clearIntervals();
@@ -397,7 +383,7 @@ TEST(VulkanBackend, NoDeviceGivesAClearErrorAndTheCpuPathStillWorks) {
     std::vector<Triangle> t;
     addQuad(p, t, 0, 0, 4, 4, 0.5f);
     cpu->setGeometry(p, t);
-    cpu->setView(identityView(8, 8, DepthFormat::unorm(24)));
+    cpu->setView(test::windowView(8, 8, DepthFormat::unorm(24)));
     CommandList ok;
     ok.beginQuery();
     ok.draw(0, 2);

@@ -34,6 +34,14 @@ struct Geo {
     }
 };
 
+// An axis-aligned quad at depth z as two triangles (0-1-2, 0-2-3) appended to p and t.
+inline void addQuad(std::vector<Vec3f>& p, std::vector<Triangle>& t, float x0, float y0, float x1, float y1, float z) {
+    const uint32_t b = uint32_t(p.size());
+    p.insert(p.end(), {Vec3f(x0, y0, z), Vec3f(x1, y0, z), Vec3f(x1, y1, z), Vec3f(x0, y1, z)});
+    t.push_back({b, b + 1, b + 2});
+    t.push_back({b, b + 2, b + 3});
+}
+
 inline OrthoView windowView(int W, int H, DepthFormat format = DepthFormat::unorm(24)) {
     OrthoView v;
     v.xmin = 0, v.xmax = W, v.ymin = 0, v.ymax = H, v.znear = 0, v.zfar = 1;
