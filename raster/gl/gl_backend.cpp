@@ -401,13 +401,7 @@ std::unique_ptr<GlBackend> makeGlBackend(const GlBackendOptions& options) {
 }
 
 bool glBackendAvailable(std::string* why, const GlBackendOptions& options) {
-    try {
-        makeGlBackend(options);
-        return true;
-    } catch (const BackendUnavailable& e) {
-        if (why) *why = e.what();
-        return false;
-    }
+    return backendAvailable([&] { makeGlBackend(options); }, why);
 }
 
 }  // namespace cullide::raster

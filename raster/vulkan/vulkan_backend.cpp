@@ -904,13 +904,7 @@ std::unique_ptr<VulkanBackend> makeVulkanBackend(const VulkanBackendOptions& opt
 }
 
 bool vulkanBackendAvailable(std::string* why, const VulkanBackendOptions& options) {
-    try {
-        makeVulkanBackend(options);
-        return true;
-    } catch (const BackendUnavailable& e) {
-        if (why) *why = e.what();
-        return false;
-    }
+    return backendAvailable([&] { makeVulkanBackend(options); }, why);
 }
 
 }  // namespace cullide::raster

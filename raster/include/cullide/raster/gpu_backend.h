@@ -31,4 +31,17 @@ public:
     virtual int subpixelBits() const = 0;
 };
 
+// Whether make() succeeds (a backend can be made here); otherwise false with BackendUnavailable's
+// message in *why. The one body behind glBackendAvailable and vulkanBackendAvailable.
+template <typename Make>
+bool backendAvailable(const Make& make, std::string* why) {
+    try {
+        make();
+        return true;
+    } catch (const BackendUnavailable& e) {
+        if (why) *why = e.what();
+        return false;
+    }
+}
+
 }  // namespace cullide::raster
