@@ -964,6 +964,72 @@ TEST(Differential, ThreadCountInvariance) {
     }
 }
 
+// Trap: setup writes each chunk of 1024 triangles into a slot of one record per triangle; a chunk
+// of triangles clipped into several sub-triangles outgrows its slot, spills, and every slot moves
+// (records.cpp). A wrong shift of the record ranges, a spilled chunk's records lost, or a spill
+// left over into the next list would change counts or depth against the scalar path. Three
+// chunks, the middle one all triangles crossing both depth planes (3 sub-triangles each); draws
+// within and across chunks; then a list without clipping on the same backend.
+TEST(Differential, ClippedChunksSpillTheirSlots) {
+    const int W = 96, H = 80, kChunk = 1024;
+    std::mt19937_64 rng(4242);
+    auto uni = [&](double lo, double hi) { return lo + (hi - lo) * double(rng() >> 11) * 0x1p-53; };
+    Geo geo;
+    for (int t = 0; t < 3 * kChunk; ++t) {
+        const bool crossing = t >= kChunk && t < 2 * kChunk;
+        const double cx = uni(5, W - 5), cy = uni(5, H - 5), r = crossing ? uni(4, 12) : uni(0.5, 4);
+        const double z = uni(0.2, 0.8);
+        geo.tri(Vec3f(float(cx - r), float(cy - r), float(crossing ? -0.5 : z)),
+                Vec3f(float(cx + r), float(cy - r * 0.3), float(crossing ? 0.5 : z + 0.1)),
+                Vec3f(float(cx), float(cy + r), float(crossing ? 1.5 : z - 0.1)));
+    }
+    CommandList clipped;
+    clipped.clear(1.0);
+    for (const auto& [first, count] : std::vector<std::pair<uint32_t, uint32_t>>{
+             {0, 3 * kChunk}, {kChunk + 100, 50}, {kChunk - 10, 30}, {2 * kChunk - 5, 400}, {0, 3 * kChunk}}) {
+        clipped.depthFunc(count == 50 ? DepthFunc::Always : DepthFunc::Less);
+        clipped.beginQuery();
+        clipped.draw(first, count);
+        clipped.endQuery();
+    }
+    CommandList plain;
+    plain.clear(1.0);
+    plain.depthFunc(DepthFunc::LEqual);
+    plain.beginQuery();
+    plain.draw(0, kChunk);
+    plain.endQuery();
+    plain.beginQuery();
+    plain.draw(2 * kChunk, kChunk);
+    plain.endQuery();
+    const OrthoView view = windowView(W, H, DepthFormat::unorm(24));
+    auto runBoth = [&](const CpuBackendOptions& o) {
+        auto b = backendFor(geo, view, o);
+        Outcome first, second;
+        first.results = b->execute(clipped);
+        first.stats = b->lastStats();
+        first.depth = b->readDepth();
+        second.results = b->execute(plain);
+        second.stats = b->lastStats();
+        second.depth = b->readDepth();
+        return std::pair{first, second};
+    };
+    CpuBackendOptions ref;
+    ref.scalarReference = true;
+    const auto expected = runBoth(ref);
+    // The middle chunk is clipped (every triangle of it, in each of its draws) and draws something.
+    EXPECT_GE(expected.first.stats.clipped, uint64_t(2 * kChunk));
+    EXPECT_EQ(expected.second.stats.clipped, 0u);
+    EXPECT_GT(expected.first.results[1], 0u);
+    for (int tile : {16, 64}) {
+        CpuBackendOptions fast;
+        fast.tileSize = tile;
+        fast.threads = 2;
+        const auto got = runBoth(fast);
+        expectSame(expected.first, got.first, "clipped list, tile " + std::to_string(tile));
+        expectSame(expected.second, got.second, "plain list after it, tile " + std::to_string(tile));
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Resolutions and formats
 

@@ -58,13 +58,14 @@ void makeEvents(const CommandList& list, const DepthFormat& format, const TileGr
             int tx0 = grid.tilesX, ty0 = grid.tilesY, tx1 = -1, ty1 = -1;
             for (uint32_t i = e.recBegin; i < e.recEnd; ++i) {
                 const TileRect& t = recs.tiles[i];
+                if (t.empty()) continue;  // an unused slot (records.h)
                 tx0 = std::min<int>(tx0, t.tx0);
                 ty0 = std::min<int>(ty0, t.ty0);
                 tx1 = std::max<int>(tx1, t.tx1);
                 ty1 = std::max<int>(ty1, t.ty1);
             }
             e.tiles =
-                tx1 < 0 ? TileRect{1, 1, 0, 0} : TileRect{uint16_t(tx0), uint16_t(ty0), uint16_t(tx1), uint16_t(ty1)};
+                tx1 < 0 ? kNoTiles : TileRect{uint16_t(tx0), uint16_t(ty0), uint16_t(tx1), uint16_t(ty1)};
             // Conservative setup only rejects: nothing is clipped, zero area is drawn.
             std::array<uint32_t, 3>& s = out.stats[k];
             for (uint32_t t = e.first; t < e.first + e.count; ++t) {

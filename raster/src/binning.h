@@ -25,7 +25,9 @@ inline constexpr uint32_t kMaxBinChunks = 64;
 // Tile rectangle [tx0, tx1] x [ty0, ty1], inclusive; tx0 > tx1 when empty.
 struct TileRect {
     uint16_t tx0, ty0, tx1, ty1;
+    bool empty() const { return tx0 > tx1; }
 };
+inline constexpr TileRect kNoTiles{1, 1, 0, 0};
 
 // The viewport's tiles, row-major.
 struct TileGrid {
@@ -131,12 +133,13 @@ struct Event {
     uint32_t clearValue = 0;
     uint32_t recBegin = 0, recEnd = 0;  // draw: record range
     uint32_t first = 0, count = 0;  // draw: triangle range
-    TileRect tiles{1, 1, 0, 0};
+    TileRect tiles = kNoTiles;
     bool clears() const { return clear || intervalClear; }
 };
 
 // What the events need of a kind of records (plain or conservative, records.h): per triangle its
-// record range [begin, end) and its TriFlags; per record its tile rectangle.
+// record range [begin, end) and its TriFlags; per record its tile rectangle (kNoTiles for the
+// unused slots between records).
 struct RecordIndex {
     std::span<const uint32_t> begin, end;
     std::span<const uint8_t> flags;

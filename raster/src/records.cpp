@@ -7,12 +7,13 @@
 #include <oneapi/tbb/blocked_range.h>
 
 #include <algorithm>
+#include <atomic>
 
 namespace cullide::raster::detail {
 
 namespace {
 
-constexpr uint32_t kSetupChunk = 1024;  // triangles per setup task
+constexpr uint32_t kSetupChunk = 1024;  // triangles per setup task and per slot
 
 // set.chunks: the union of the ranges of `op` commands as sorted disjoint intervals (by sorting
 // the ranges when there are few, else by a difference array over the touched triangle span), cut
@@ -62,9 +63,55 @@ TileRect tileRectOf(const ConsRec& r, const TileGrid& grid) {
     return grid.of(r.t.x0, r.t.y0, r.t.x1, r.t.y1);
 }
 
+// Resizes `v` to n elements, reallocating to exactly n when it must grow: the contents are about
+// to be overwritten, so the old buffer goes first (no peak of both, no doubled capacity).
+template <typename T>
+void resizeForOverwrite(std::vector<T>& v, size_t n) {
+    if (v.capacity() < n) {
+        std::vector<T>().swap(v);
+        v.reserve(n);
+    }
+    v.resize(n);
+}
+
+// Lays the slots out again when chunks spilled (clipped triangles with several records): each
+// chunk's slot grows to what it used, the records move, begin/end follow. Rare; costs one copy.
+template <typename Rec>
+void relayoutSpilled(RecordSet<Rec>& set) {
+    const std::vector<std::array<uint32_t, 2>>& chunks = set.chunks;
+    std::vector<size_t> start(chunks.size() + 1, 0);
+    for (size_t ci = 0; ci < chunks.size(); ++ci)
+        start[ci + 1] = start[ci] + std::max<size_t>(set.slotStart[ci + 1] - set.slotStart[ci], set.used[ci]);
+    CULLIDE_CHECK(start.back() < size_t(UINT32_MAX), "too many triangle records for 32-bit indices");
+    std::vector<Rec> records(start.back());
+    std::vector<TileRect> tiles(start.back(), kNoTiles);
+    parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t ci = r.begin(); ci != r.end(); ++ci) {
+            const bool spilled = !set.spillRecords[ci].empty();
+            const Rec* from = spilled ? set.spillRecords[ci].data() : set.records.data() + set.slotStart[ci];
+            const TileRect* fromTiles = spilled ? set.spillTiles[ci].data() : set.tiles.data() + set.slotStart[ci];
+            std::copy_n(from, set.used[ci], records.begin() + ptrdiff_t(start[ci]));
+            std::copy_n(fromTiles, set.used[ci], tiles.begin() + ptrdiff_t(start[ci]));
+            const uint32_t shift = uint32_t(start[ci] - set.slotStart[ci]);
+            for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) {
+                set.begin[t] += shift;
+                set.end[t] += shift;
+            }
+        }
+    });
+    set.records.swap(records);
+    set.tiles.swap(tiles);
+    set.slotStart.swap(start);
+    for (size_t ci = 0; ci < chunks.size(); ++ci) {
+        std::vector<Rec>().swap(set.spillRecords[ci]);
+        std::vector<TileRect>().swap(set.spillTiles[ci]);
+    }
+}
+
 // Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, emit)`
 // calls emit(record) for each record of triangle t and returns its TriFlags (`scratch`, a Scratch
-// per task). Then compacts the records in triangle order and bins them to tiles.
+// per task). Records go straight to their chunk's slot (records.h); then they are binned to
+// tiles.
 template <typename Scratch, typename Rec, typename SetupOne>
 void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const SetupOne& setupOne) {
     if (set.flags.size() < triangles) {
@@ -73,48 +120,54 @@ void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, c
         set.end.resize(triangles);
     }
     const std::vector<std::array<uint32_t, 2>>& chunks = set.chunks;
-    if (set.chunkRecords.size() < chunks.size()) {
-        set.chunkRecords.resize(chunks.size());
-        set.chunkTiles.resize(chunks.size());
+    set.slotStart.resize(chunks.size() + 1);
+    set.slotStart[0] = 0;
+    for (size_t ci = 0; ci < chunks.size(); ++ci)
+        set.slotStart[ci + 1] = set.slotStart[ci] + (chunks[ci][1] - chunks[ci][0]);
+    CULLIDE_CHECK(set.slotStart.back() < size_t(UINT32_MAX), "too many triangle records for 32-bit indices");
+    resizeForOverwrite(set.records, set.slotStart.back());
+    resizeForOverwrite(set.tiles, set.slotStart.back());
+    set.used.assign(chunks.size(), 0);
+    if (set.spillRecords.size() < chunks.size()) {
+        set.spillRecords.resize(chunks.size());
+        set.spillTiles.resize(chunks.size());
     }
+    std::atomic<bool> anySpilled{false};
     parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
         Scratch scratch;
         const TileGrid g = grid;
         for (size_t ci = r.begin(); ci != r.end(); ++ci) {
-            std::vector<Rec>& recs = set.chunkRecords[ci];
-            std::vector<TileRect>& tiles = set.chunkTiles[ci];
-            recs.clear();
-            tiles.clear();
+            const size_t slot = set.slotStart[ci], cap = set.slotStart[ci + 1] - slot;
+            Rec* const recs = set.records.data() + slot;
+            TileRect* const tiles = set.tiles.data() + slot;
+            std::vector<Rec>& spill = set.spillRecords[ci];
+            std::vector<TileRect>& spillTiles = set.spillTiles[ci];
+            size_t n = 0;
             auto emit = [&](const Rec& rec) {
-                recs.push_back(rec);
-                tiles.push_back(tileRectOf(rec, g));
+                if (n == cap && spill.empty()) {  // outgrew the slot: move to the side vector
+                    spill.assign(recs, recs + n);
+                    spillTiles.assign(tiles, tiles + n);
+                }
+                if (spill.empty()) {
+                    recs[n] = rec;
+                    tiles[n] = tileRectOf(rec, g);
+                } else {
+                    spill.push_back(rec);
+                    spillTiles.push_back(tileRectOf(rec, g));
+                }
+                ++n;
             };
             for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) {
-                set.begin[t] = uint32_t(recs.size());
+                set.begin[t] = uint32_t(slot + n);
                 set.flags[t] = setupOne(t, scratch, emit);
-                set.end[t] = uint32_t(recs.size());
+                set.end[t] = uint32_t(slot + n);
             }
+            if (spill.empty()) std::fill(tiles + n, tiles + cap, kNoTiles);
+            else anySpilled.store(true, std::memory_order_relaxed);
+            set.used[ci] = uint32_t(n);
         }
     });
-    set.chunkOffset.resize(chunks.size() + 1);
-    set.chunkOffset[0] = 0;
-    for (size_t ci = 0; ci < chunks.size(); ++ci)
-        set.chunkOffset[ci + 1] = set.chunkOffset[ci] + set.chunkRecords[ci].size();
-    const size_t total = set.chunkOffset.back();
-    CULLIDE_CHECK(total < size_t(UINT32_MAX), "too many triangle records for 32-bit indices");
-    set.records.resize(total);
-    set.tiles.resize(total);
-    parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t ci = r.begin(); ci != r.end(); ++ci) {
-            const uint32_t off = uint32_t(set.chunkOffset[ci]);
-            std::copy(set.chunkRecords[ci].begin(), set.chunkRecords[ci].end(), set.records.begin() + off);
-            std::copy(set.chunkTiles[ci].begin(), set.chunkTiles[ci].end(), set.tiles.begin() + off);
-            for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) {
-                set.begin[t] += off;
-                set.end[t] += off;
-            }
-        }
-    });
+    if (anySpilled.load()) relayoutSpilled(set);
     binToTiles(set.tiles, grid, set.counts, set.bins);
 }
 

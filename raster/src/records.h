@@ -27,21 +27,27 @@ struct ConsRec {
 };
 
 // The records of the triangles a list draws, in triangle order: a draw [first, first + count) is
-// the record range [begin[first], end[first + count - 1]). Capacity is kept across lists.
+// the record range [begin[first], end[first + count - 1]). Setup writes the records in place: the
+// drawn triangles are cut into chunks, and each chunk owns a slot of one record per triangle,
+// which holds every chunk whose triangles need no more than one record each (all but clipped
+// ones); the slot's unused tail stays in the range, with kNoTiles, so no tile ever lists it. A
+// chunk that needs more spills to a side vector and the slots are then laid out again. Capacity
+// is kept across lists, grown to the exact need (never doubled).
 template <typename Rec>
 struct RecordSet {
     std::vector<uint8_t> flags;  // per triangle drawn: TriFlags
     std::vector<uint32_t> begin, end;  // per triangle drawn: its records
-    std::vector<Rec> records;
-    std::vector<TileRect> tiles;  // per record: the tiles of its pixel rectangle
+    std::vector<Rec> records;  // per slot
+    std::vector<TileRect> tiles;  // per slot: the tiles of its record's pixel rectangle, or kNoTiles
     TileBins bins;  // per tile: the records whose rectangle holds it
 
     // Scratch of setup and binning.
     std::vector<std::array<uint32_t, 2>> ranges, chunks;
     std::vector<int32_t> coverDiff;
-    std::vector<std::vector<Rec>> chunkRecords;
-    std::vector<std::vector<TileRect>> chunkTiles;
-    std::vector<size_t> chunkOffset;
+    std::vector<size_t> slotStart;  // per chunk, and the end
+    std::vector<uint32_t> used;  // per chunk: its records
+    std::vector<std::vector<Rec>> spillRecords;  // per chunk that outgrew its slot
+    std::vector<std::vector<TileRect>> spillTiles;
     std::vector<uint32_t> counts;
 
     RecordIndex index() const { return {begin, end, flags, tiles}; }
