@@ -24,12 +24,12 @@ void rasterizeInTile(const EdgeTri& t, int bx0, int by0, int bx1, int by1, uint3
     const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
     const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
     if (x0 > x1 || y0 > y1) return;
-    const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2];
+    const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2], b0 = t.b[0], b1 = t.b[1], b2 = t.b[2];
     uint64_t frag = 0, pass = 0;
     for (int j = y0; j <= y1; ++j) {
-        int64_t e0 = a0 * x0 + t.b[0] * j + t.c[0];
-        int64_t e1 = a1 * x0 + t.b[1] * j + t.c[1];
-        int64_t e2 = a2 * x0 + t.b[2] * j + t.c[2];
+        int64_t e0 = a0 * x0 + b0 * j + t.c[0];
+        int64_t e1 = a1 * x0 + b1 * j + t.c[1];
+        int64_t e2 = a2 * x0 + b2 * j + t.c[2];
         const double row = t.plane.row(j);
         uint32_t* d = depth + size_t(j) * stride;
         [[maybe_unused]] FragGroup* group = nullptr;  // the row's open group
@@ -101,7 +101,7 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     if (x1 - x0 < 2)
         return rasterizeInTile<F, Float, Record>(t, bx0, by0, bx1, by1, depth, stride, mask, bits, fragments, passed,
                                                  rec);
-    const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2];
+    const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2], b0 = t.b[0], b1 = t.b[1], b2 = t.b[2];
     const __m256i off0 = _mm256_set_epi64x(3 * a0, 2 * a0, a0, 0), step0 = _mm256_set1_epi64x(4 * a0);
     const __m256i off1 = _mm256_set_epi64x(3 * a1, 2 * a1, a1, 0), step1 = _mm256_set1_epi64x(4 * a1);
     const __m256i off2 = _mm256_set_epi64x(3 * a2, 2 * a2, a2, 0), step2 = _mm256_set1_epi64x(4 * a2);
@@ -113,9 +113,9 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     const __m256i low32 = _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0);
     uint64_t frag = 0, pass = 0;
     for (int j = y0; j <= y1; ++j) {
-        __m256i e0 = _mm256_add_epi64(_mm256_set1_epi64x(a0 * x0 + t.b[0] * j + t.c[0]), off0);
-        __m256i e1 = _mm256_add_epi64(_mm256_set1_epi64x(a1 * x0 + t.b[1] * j + t.c[1]), off1);
-        __m256i e2 = _mm256_add_epi64(_mm256_set1_epi64x(a2 * x0 + t.b[2] * j + t.c[2]), off2);
+        __m256i e0 = _mm256_add_epi64(_mm256_set1_epi64x(a0 * x0 + b0 * j + t.c[0]), off0);
+        __m256i e1 = _mm256_add_epi64(_mm256_set1_epi64x(a1 * x0 + b1 * j + t.c[1]), off1);
+        __m256i e2 = _mm256_add_epi64(_mm256_set1_epi64x(a2 * x0 + b2 * j + t.c[2]), off2);
         const __m256d row = _mm256_set1_pd(t.plane.row(j));
         uint32_t* d = depth + size_t(j) * stride;
         for (int i = x0; i <= x1; i += 4, e0 = _mm256_add_epi64(e0, step0), e1 = _mm256_add_epi64(e1, step1),

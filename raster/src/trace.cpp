@@ -576,6 +576,9 @@ std::vector<std::vector<uint64_t>> replayTrace(const TraceReader& trace, DepthBa
     for (size_t f = 0; f < trace.frameCount(); ++f) {
         trace.readGeometry(f, positions, triangles);
         backend.setGeometry(positions, triangles);
+        // The backend keeps its own copy: release ours (a frame of 10^6 triangles holds ~18 MB).
+        std::vector<Vec3f>().swap(positions);
+        std::vector<Triangle>().swap(triangles);
         for (size_t l = 0; l < trace.listCount(f); ++l, ++list) {
             const TraceList tl = trace.readList(list);
             backend.setView(tl.view);

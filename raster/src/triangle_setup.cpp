@@ -5,8 +5,11 @@
 // interpolation); Mesa llvmpipe lp_setup_tri.c (snapping, edge functions, float depth plane).
 #include "triangle_setup.h"
 
+#include "cullide/error.h"
+
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 namespace cullide::raster::detail {
 
@@ -198,17 +201,20 @@ bool makeEdgeTri(const SnappedTri& t, const SetupParams& params, EdgeTri& out) {
     const int64_t j0 = std::max<int64_t>(ceilShift(miny - half, S), 0);
     const int64_t j1 = std::min<int64_t>(floorShift(maxy - half, S), params.height - 1);
     if (i0 > i1 || j0 > j1) return false;
-    out.x0 = int32_t(i0);
-    out.x1 = int32_t(i1);
-    out.y0 = int32_t(j0);
-    out.y1 = int32_t(j1);
+    out.x0 = uint16_t(i0);
+    out.x1 = uint16_t(i1);
+    out.y0 = uint16_t(j0);
+    out.y1 = uint16_t(j1);
     for (int k = 0; k < 3; ++k) {
         const int n = (k + 1) % 3;
         const int64_t dx = t.x[n] - t.x[k], dy = t.y[n] - t.y[k];
-        // E(p) = dx*(py - yk) - dy*(px - xk) with p = (i*2^S + half, j*2^S + half).
-        out.a[k] = -dy * one;
-        out.b[k] = dx * one;
-        out.c[k] = dx * (half - t.y[k]) - dy * (half - t.x[k]) - (isInclusiveEdge(params.fillRule, dx, dy) ? 0 : 1);
+        CULLIDE_CHECK(std::abs(dx) <= INT32_MAX && std::abs(dy) <= INT32_MAX, "snapped edge beyond the guard band");
+        // E(p) = dx*(py - yk) - dy*(px - xk) with p = (i*2^S + half, j*2^S + half), divided by 2^S
+        // (EdgeTri).
+        out.a[k] = int32_t(-dy);
+        out.b[k] = int32_t(dx);
+        out.c[k] = floorShift(
+            dx * (half - t.y[k]) - dy * (half - t.x[k]) - (isInclusiveEdge(params.fillRule, dx, dy) ? 0 : 1), S);
     }
     out.plane = t.plane;
     return true;

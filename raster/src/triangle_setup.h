@@ -61,12 +61,18 @@ uint8_t setupUnclipped(const WinVertex& v0, const WinVertex& v1, const WinVertex
 // The fast path's form of a snapped triangle: edge functions over pixel indices,
 // E_k(i, j) = a[k]*i + b[k]*j + c[k], with the fill rule folded into c so that the centre of
 // pixel (i, j) is covered iff all three are >= 0; and the inclusive pixel bounding box clipped to
-// the viewport.
+// the viewport. The snapped edge function at a centre is 2^S*(a*i + b*j) + c' with c' the
+// constant part; since a*i + b*j is an integer, 2^S*(a*i + b*j) + c' >= 0 iff
+// a*i + b*j + floor(c' / 2^S) >= 0, so c holds floor(c' / 2^S) and a, b the bare coordinate
+// differences, which fit 32 bits inside the guard band (|x|, |y| <= 2^kGuardBandFixedBits). 96
+// bytes: records are most of the backend's memory (one per triangle drawn).
 struct EdgeTri {
-    int64_t a[3], b[3], c[3];
-    int32_t x0, y0, x1, y1;
+    int64_t c[3];
+    int32_t a[3], b[3];
+    uint16_t x0, y0, x1, y1;  // viewports are at most 16384 pixels wide
     DepthPlane plane;
 };
+static_assert(sizeof(EdgeTri) == 96);
 
 // Returns false (and leaves `out` unspecified) when the bounding box holds no pixel centre of the
 // viewport.
