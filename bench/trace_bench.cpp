@@ -39,7 +39,7 @@ uint64_t record(const Scene& scene, const std::filesystem::path& path, int threa
     raster::TraceWriter writer(path, rules, {{"scene", "bench"}}, {{"cullide_version", "bench"}});
     raster::TraceRecorder recorder(*cpu, writer, rules);
     runCullide(scene, recorder, CullideOptions{});
-    return writer.finish();
+    return recorder.finish();
 }
 
 void BM_TraceOverhead(benchmark::State& state) {

@@ -1030,6 +1030,34 @@ TEST(Differential, ClippedChunksSpillTheirSlots) {
     }
 }
 
+// Trap: releaseScratch() (trace recording frees the records between frames) leaving the backend
+// without per-tile state or with stale records: lists after it, with and without a new view,
+// must give what a backend that never released gives, for the plain and the conservative path.
+TEST(CpuBackend, ReleaseScratchKeepsResults) {
+    const RandomScene s = randomScene(77, 90, 70, 500, 200);
+    const OrthoView view = windowView(90, 70, DepthFormat::unorm(24));
+    CpuBackendOptions o;
+    o.threads = 2;
+    o.tileSize = 16;
+    auto kept = backendFor(s.geo, view, o), released = backendFor(s.geo, view, o);
+    CommandList cons;
+    cons.clearIntervals();
+    cons.beginQuery();
+    cons.drawConservative(0, 200, true, true);
+    cons.endQuery();
+    for (int round = 0; round < 3; ++round) {
+        if (round == 2) {  // a new view after a release: the tile state is made again
+            const OrthoView other = windowView(70, 90, DepthFormat::float32());
+            kept->setView(other);
+            released->setView(other);
+        }
+        EXPECT_EQ(kept->execute(s.list), released->execute(s.list)) << "round " << round;
+        EXPECT_EQ(kept->execute(cons), released->execute(cons)) << "round " << round;
+        EXPECT_EQ(kept->readDepth().values, released->readDepth().values) << "round " << round;
+        released->releaseScratch();
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Resolutions and formats
 

@@ -63,7 +63,7 @@ uint64_t recordSmall(const std::filesystem::path& path, int threads = 1) {
         recorder.setFrame(f);
         runCullide(s, recorder, smallOptions());
     }
-    return writer.finish();
+    return recorder.finish();
 }
 
 // Splits a trace into its header (parsed) and its binary section, and joins them again.

@@ -106,6 +106,17 @@ public:
         windowValid_ = false;
     }
 
+    void releaseScratch() override {
+        std::vector<WinVertex>().swap(window_);
+        std::vector<SnapVertex>().swap(snapped_);
+        windowValid_ = false;
+        plain_ = {};
+        events_ = {};
+        for (TileOut& out : tileOut_) std::vector<detail::QueryCount>().swap(out.queries);  // one per tile: kept
+        frags_.clear();
+        conservative_ = {};
+    }
+
     void setView(const OrthoView& view) override {
         view.validate();
         const bool resize =

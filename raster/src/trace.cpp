@@ -541,6 +541,7 @@ TraceRecorder::TraceRecorder(DepthBackend& reference, TraceWriter& writer, const
     : reference_(reference), writer_(writer), intervals_(withThreads(rules.intervalOptions(), threads)) {}
 
 void TraceRecorder::setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) {
+    endFrame();  // the previous frame's lists need its geometry
     reference_.setGeometry(positions, triangles);
     intervals_.setGeometry(positions, triangles);
     writer_.beginFrame(frame_, positions, triangles);
@@ -548,22 +549,36 @@ void TraceRecorder::setGeometry(std::span<const Vec3f> positions, std::span<cons
 
 void TraceRecorder::setView(const OrthoView& view) {
     reference_.setView(view);
-    intervals_.setView(view);
     view_ = view;
 }
 
 std::vector<uint64_t> TraceRecorder::execute(const CommandList& list) {
     if (list.conservativeCount() > 0) refuseConservative();
     std::vector<uint64_t> results = reference_.execute(list);
-    const std::vector<QueryInterval> iv = intervals_.execute(list);
-    std::vector<TraceQuery> queries(results.size());
-    for (size_t q = 0; q < results.size(); ++q) {
-        queries[q] = {results[q], iv[q]};
-        if (!iv[q].contains(results[q])) ++referenceOutside_;
-    }
-    queries_ += results.size();
-    writer_.addList(view_, list, queries);
+    pending_.push_back({view_, list, results});
     return results;
+}
+
+void TraceRecorder::endFrame() {
+    // The evaluator sees the same setView/execute sequence as the reference did.
+    for (const PendingList& p : pending_) {
+        intervals_.setView(p.view);
+        const std::vector<QueryInterval> iv = intervals_.execute(p.commands);
+        std::vector<TraceQuery> queries(p.results.size());
+        for (size_t q = 0; q < p.results.size(); ++q) {
+            queries[q] = {p.results[q], iv[q]};
+            if (!iv[q].contains(p.results[q])) ++referenceOutside_;
+        }
+        queries_ += p.results.size();
+        writer_.addList(p.view, p.commands, queries);
+    }
+    if (!pending_.empty()) intervals_.releaseScratch();
+    std::vector<PendingList>().swap(pending_);
+}
+
+uint64_t TraceRecorder::finish() {
+    endFrame();
+    return writer_.finish();
 }
 
 std::vector<std::vector<uint64_t>> replayTrace(const TraceReader& trace, DepthBackend& backend,

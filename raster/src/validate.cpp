@@ -241,6 +241,20 @@ void QueryIntervals::setView(const OrthoView& view) {
     haveView_ = true;
 }
 
+void QueryIntervals::releaseScratch() {
+    Impl& im = *impl_;
+    im.locals.clear();
+    std::vector<Vert>().swap(im.vert);
+    std::vector<Op>().swap(im.ops);
+    std::vector<uint64_t>().swap(im.drawBase);
+    std::vector<size_t>().swap(im.drawOp);
+    std::vector<PixelRange>().swap(im.range);
+    std::vector<uint8_t>().swap(im.clipped);
+    std::vector<uint64_t>().swap(im.binPos);
+    std::vector<uint64_t>().swap(im.bandBegin);
+    std::vector<uint32_t>().swap(im.binned);
+}
+
 std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std::vector<uint64_t>* exact,
                                                    bool* exactValid, CoverageCapture* capture) {
     if (!haveView_) throw InputError("command list", "execute() before setView()");

@@ -76,6 +76,10 @@ public:
     virtual IntervalImage readIntervals() = 0;
     // Counters of the most recent execute() (zero before the first).
     virtual const RasterStats& lastStats() const = 0;
+    // Frees the scratch kept across lists (triangle records, bins, events, fragment caches, window
+    // coordinates), keeping geometry, view and buffers; the next execute() allocates it again.
+    // For a caller that runs something else large between lists (trace recording).
+    virtual void releaseScratch() = 0;
 };
 
 // Creates a CPU backend. Throws InputError("cpu backend options", ...) on options out of range.

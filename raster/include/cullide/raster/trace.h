@@ -157,19 +157,34 @@ public:
     std::string describe() const override { return "trace recorder: " + reference_.describe(); }
     void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override;
     void setView(const OrthoView& view) override;
+    // Runs `list` on the reference and keeps it, with its view and answers, until endFrame().
     std::vector<uint64_t> execute(const CommandList& list) override;
     DepthImage readDepth() override { return reference_.readDepth(); }
 
     void setFrame(uint32_t frame) { frame_ = frame; }
-    // Queries whose reference count lies outside its own interval (a bug in one of the two).
+    // Ends the frame: the intervals of the frame's lists, in order, then the lists to the writer;
+    // the interval evaluator's scratch is freed. The intervals wait for it so that the caller's
+    // pipeline (hierarchy, records of the reference) and the evaluator are not in memory at once:
+    // call it after the frame's run (setGeometry and finish() call it too).
+    void endFrame();
+    // endFrame(), then TraceWriter::finish(): the trace's size in bytes.
+    uint64_t finish();
+    // Queries whose reference count lies outside its own interval (a bug in one of the two), and
+    // all queries, of the frames ended so far.
     uint64_t referenceOutside() const { return referenceOutside_; }
     uint64_t queries() const { return queries_; }
 
 private:
+    struct PendingList {
+        OrthoView view;
+        CommandList commands;
+        std::vector<uint64_t> results;
+    };
     DepthBackend& reference_;
     TraceWriter& writer_;
     QueryIntervals intervals_;
     OrthoView view_;
+    std::vector<PendingList> pending_;
     uint32_t frame_ = 0;
     uint64_t referenceOutside_ = 0, queries_ = 0;
 };

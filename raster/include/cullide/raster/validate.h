@@ -83,6 +83,9 @@ public:
     // says whether they are trustworthy (no clipped triangle since the last full clear).
     std::vector<QueryInterval> execute(const CommandList& list, std::vector<uint64_t>* exact = nullptr,
                                        bool* exactValid = nullptr, CoverageCapture* capture = nullptr);
+    // Frees the per-list scratch (per-vertex, per-drawn-triangle and per-band arrays), keeping the
+    // geometry, the view and the buffers' state; the next execute() allocates it again.
+    void releaseScratch();
 
 private:
     struct Impl;  // the thread arena and per-list scratch (validate.cpp)
