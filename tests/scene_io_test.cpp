@@ -126,6 +126,44 @@ TEST(SceneIo, WriteThenLoadRoundTripsAndIsDeterministic) {
     EXPECT_EQ(files, 1u + 3u + 2u);  // the scene, three meshes, two frame position files
 }
 
+// Trap: frame positions read lazily (loadScene keeps one frame in memory, not all) but trusted
+// without a check when used: a frame file changed after loading (fewer vertices, non-finite, gone)
+// must give an InputError naming that file at sceneAt, and the frames without it still work.
+TEST(SceneIo, FramePositionsAreCheckedWhenUsed) {
+    TempDir d;
+    writeScene(loadScene(testData("good/scene.json")), d / "s.json");
+    const Animation a = loadScene(d / "s.json");
+    ASSERT_EQ(a.frameCount(), 3u);
+    const std::string frameFile = a.frames[1].poses[0].positionsFile;
+    ASSERT_FALSE(frameFile.empty());
+    EXPECT_FALSE(a.frames[1].poses[0].positions.has_value());  // not held in memory
+    const Scene before = a.sceneAt(1);
+    auto expectNamed = [&](const std::string& bytes, const std::string& what) {
+        test::writeBytes(frameFile, bytes);
+        try {
+            a.sceneAt(1);
+            ADD_FAILURE() << what << ": no error";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(std::filesystem::path(frameFile).filename().string()),
+                      std::string::npos)
+                << what << ": " << e.what();
+        }
+        EXPECT_EQ(a.sceneAt(0).objects.size(), 3u) << what;  // frame 0 reads no file
+    };
+    expectNamed("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "fewer vertices");
+    std::string nan = "OFF\n" + std::to_string(before.objects[0].mesh.vertexCount()) + " 1 0\n";
+    for (size_t v = 0; v < before.objects[0].mesh.vertexCount(); ++v) nan += v == 1 ? "nan 0 0\n" : "0 0 0\n";
+    expectNamed(nan + "3 0 1 2\n", "a NaN vertex");
+    std::filesystem::remove(frameFile);
+    try {
+        a.sceneAt(1);
+        ADD_FAILURE() << "a removed frame file gave no error";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(std::filesystem::path(frameFile).filename().string()), std::string::npos)
+            << e.what();
+    }
+}
+
 // Trap: a failed scene write leaving a file behind, or a message without the path.
 TEST(SceneIo, FailedWriteThrowsNamingTheFile) {
     const Animation a = loadScene(testData("good/polys.off"));

@@ -1,6 +1,7 @@
 #include "cullide/scene.h"
 
 #include "cullide/error.h"
+#include "cullide/mesh_io.h"
 
 #include <cmath>
 #include <limits>
@@ -54,6 +55,18 @@ FlatScene flatten(const Scene& scene) {
     return f;
 }
 
+void checkPosePositions(std::span<const Vec3f> positions, const Object& object, const std::string& source,
+                        const std::string& where) {
+    if (positions.size() != object.mesh.positions.size())
+        throw InputError(source, where + ", object '" + object.name + "': " + std::to_string(positions.size()) +
+                                     " positions, but the mesh has " + std::to_string(object.mesh.positions.size()) +
+                                     " vertices");
+    for (size_t v = 0; v < positions.size(); ++v)
+        if (!positions[v].allFinite())
+            throw InputError(source, where + ", object '" + object.name + "': vertex " + std::to_string(v) +
+                                         " is not finite (NaN or Inf)");
+}
+
 Scene Animation::sceneAt(size_t f) const {
     CULLIDE_CHECK(f < frameCount(), "frame index out of range");
     Scene s = scene;
@@ -61,7 +74,14 @@ Scene Animation::sceneAt(size_t f) const {
     const Frame& fr = frames[f];
     for (size_t i = 0; i < fr.poses.size() && i < s.objects.size(); ++i) {
         if (fr.poses[i].transform) s.objects[i].transform = *fr.poses[i].transform;
-        if (fr.poses[i].positions) s.objects[i].mesh.positions = *fr.poses[i].positions;
+        if (fr.poses[i].positions) {
+            s.objects[i].mesh.positions = *fr.poses[i].positions;
+        } else if (!fr.poses[i].positionsFile.empty()) {
+            const std::string& file = fr.poses[i].positionsFile;
+            std::vector<Vec3f> positions = loadMesh(file).positions;
+            checkPosePositions(positions, s.objects[i], file, "frame " + std::to_string(f));
+            s.objects[i].mesh.positions = std::move(positions);
+        }
     }
     return s;
 }
@@ -87,18 +107,7 @@ void validateAnimation(const Animation& a, const std::string& source) {
             const Object& o = a.scene.objects[i];
             if (p.transform && !finite(*p.transform))
                 throw InputError(source, where + ", object '" + o.name + "': non-finite transform");
-            if (p.positions) {
-                if (p.positions->size() != o.mesh.positions.size())
-                    throw InputError(source,
-                                     where + ", object '" + o.name + "': " + std::to_string(p.positions->size()) +
-                                         " positions, but the mesh has " + std::to_string(o.mesh.positions.size()) +
-                                         " vertices");
-                for (size_t v = 0; v < p.positions->size(); ++v)
-                    if (!(*p.positions)[v].allFinite())
-                        throw InputError(source,
-                                         where + ", object '" + o.name + "': vertex " + std::to_string(v) +
-                                             " is not finite (NaN or Inf)");
-            }
+            if (p.positions) checkPosePositions(*p.positions, o, source, where);
         }
     }
 }

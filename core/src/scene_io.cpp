@@ -200,8 +200,12 @@ private:
         return out;
     }
 
+    fs::path referencedPath(const std::string& ref) const {
+        return fs::path(ref).is_absolute() ? fs::path(ref) : dir_ / ref;
+    }
+
     Mesh loadReferencedMesh(const std::string& ref, const std::string& what) const {
-        const fs::path p = fs::path(ref).is_absolute() ? fs::path(ref) : dir_ / ref;
+        const fs::path p = referencedPath(ref);
         try {
             return loadMesh(p);
         } catch (const InputError& e) {
@@ -235,7 +239,9 @@ private:
                     fail(pw + ".positions: '" + ref + "' has " + std::to_string(m.positions.size()) +
                          " vertices, but object '" + name + "' has " + std::to_string(expected) +
                          " (wrong position count)");
-                p.positions = std::move(m.positions);
+                checkPosePositions(m.positions, scene.objects[it->second], src_, where);
+                // Checked now, read again by sceneAt when the frame is used (ObjectPose).
+                p.positionsFile = referencedPath(ref).string();
             }
         }
         return frame;
@@ -324,15 +330,15 @@ void writeScene(const Animation& animation, const fs::path& path) {
             OrderedJson poses = OrderedJson::object();
             for (size_t i = 0; i < fr.poses.size(); ++i) {
                 const ObjectPose& p = fr.poses[i];
-                if (!p.transform && !p.positions) continue;
+                if (!p.transform && !p.positions && p.positionsFile.empty()) continue;
                 OrderedJson jp;
                 if (p.transform) jp["transform"] = transformJson(*p.transform);
-                if (p.positions) {
+                if (p.positions || !p.positionsFile.empty()) {
                     char num[32];
                     std::snprintf(num, sizeof num, "%04zu", f);
                     const std::string file = bases[i] + "_f" + num + ".off";
                     Mesh m;
-                    m.positions = *p.positions;
+                    m.positions = p.positions ? *p.positions : animation.sceneAt(f).objects[i].mesh.positions;
                     m.triangles = animation.scene.objects[i].mesh.triangles;
                     writeOff(m, dir / file);
                     jp["positions"] = file;

@@ -19,6 +19,7 @@
 #include <compare>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,10 @@ FlatScene flatten(const Scene& scene);
 struct ObjectPose {
     std::optional<Transform> transform;  // replaces the object's transform
     std::optional<std::vector<Vec3f>> positions;  // replaces its model-space positions (same count)
+    // Or, when `positions` is empty, the mesh file whose positions replace them, read (and checked
+    // again) each time the frame is used: a scene file's animation keeps one frame in memory, not
+    // all of them (loadAnimation reads and checks every frame once, then drops its positions).
+    std::string positionsFile;
 };
 
 struct Frame {
@@ -79,12 +84,17 @@ struct Animation {
     std::vector<Frame> frames;  // may be empty: a still scene
 
     size_t frameCount() const { return frames.empty() ? 1 : frames.size(); }
-    // The scene as it is at frame f (f < frameCount()).
+    // The scene as it is at frame f (f < frameCount()). Throws InputError(file, ...) when a
+    // pose's positionsFile no longer reads as it did (gone, changed vertex count, non-finite).
     Scene sceneAt(size_t f) const;
 };
 
 // Throws InputError(source, ...) when a frame does not fit the base scene (wrong number of
 // poses, wrong number of positions, non-finite positions or transforms).
 void validateAnimation(const Animation& animation, const std::string& source);
+// Throws InputError(source, where + ...) unless `positions` fit `object`'s mesh (same vertex
+// count, all finite).
+void checkPosePositions(std::span<const Vec3f> positions, const Object& object, const std::string& source,
+                        const std::string& where);
 
 }  // namespace cullide
