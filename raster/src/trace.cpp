@@ -140,19 +140,48 @@ Json TraceWriter::blob(const void* data, size_t bytes, const char* dtype, size_t
     return ref;
 }
 
+// The scratch file is the only copy of what was written: the previous frame's triangles are
+// compared against it, and the recorder reads a frame's geometry back from it, instead of keeping
+// them in memory (a 10^6-triangle frame is 12 MB of triangles).
+void TraceWriter::scratchRead(uint64_t offset, void* out, size_t bytes) {
+    const std::string where = path_.string();
+    bool ok = std::fflush(scratch_) == 0 && fseeko(scratch_, off_t(offset), SEEK_SET) == 0 &&
+        std::fread(out, 1, bytes, scratch_) == bytes;
+    ok = fseeko(scratch_, 0, SEEK_END) == 0 && ok;  // writes go on at the end
+    if (!ok) throw InputError(where, std::string("cannot read back the scratch file: ") + std::strerror(errno));
+}
+
+bool TraceWriter::scratchEquals(uint64_t offset, const void* data, size_t bytes) {
+    std::vector<char> buf(std::min<size_t>(bytes, size_t(1) << 20));
+    for (size_t done = 0; done < bytes; done += buf.size()) {
+        const size_t n = std::min(buf.size(), bytes - done);
+        scratchRead(offset + done, buf.data(), n);
+        if (std::memcmp(buf.data(), static_cast<const char*>(data) + done, n) != 0) return false;
+    }
+    return true;
+}
+
 void TraceWriter::beginFrame(uint32_t frame, std::span<const Vec3f> positions, std::span<const Triangle> triangles) {
     CULLIDE_CHECK(!finished_, "TraceWriter::beginFrame after finish");
     Json positionsRef = blob(positions.data(), positions.size_bytes(), "<f4", positions.size(), 3);
-    const bool sameTriangles = !lastTrianglesRef_.is_null() && lastTriangles_.size() == triangles.size() &&
-        std::equal(triangles.begin(), triangles.end(), lastTriangles_.begin());
-    if (!sameTriangles) {
+    const bool sameTriangles = !lastTrianglesRef_.is_null() &&
+        lastTrianglesRef_["shape"][0].get<size_t>() == triangles.size() &&
+        scratchEquals(lastTrianglesRef_["offset"].get<uint64_t>(), triangles.data(), triangles.size_bytes());
+    if (!sameTriangles)
         lastTrianglesRef_ = blob(triangles.data(), triangles.size_bytes(), "<u4", triangles.size(), 3);
-        lastTriangles_.assign(triangles.begin(), triangles.end());
-    }
     frames_.push_back({{"frame", frame},
                        {"positions", std::move(positionsRef)},
                        {"triangles", lastTrianglesRef_},
                        {"lists", Json::array()}});
+}
+
+void TraceWriter::frameGeometry(std::vector<Vec3f>& positions, std::vector<Triangle>& triangles) {
+    CULLIDE_CHECK(!finished_ && !frames_.empty(), "TraceWriter::frameGeometry before beginFrame");
+    const Json& f = frames_.back();
+    positions.resize(f["positions"]["shape"][0].get<size_t>());
+    triangles.resize(f["triangles"]["shape"][0].get<size_t>());
+    scratchRead(f["positions"]["offset"].get<uint64_t>(), positions.data(), positions.size() * sizeof(Vec3f));
+    scratchRead(f["triangles"]["offset"].get<uint64_t>(), triangles.data(), triangles.size() * sizeof(Triangle));
 }
 
 void TraceWriter::addList(const OrthoView& view, const CommandList& commands, std::span<const TraceQuery> queries) {
@@ -541,9 +570,8 @@ TraceRecorder::TraceRecorder(DepthBackend& reference, TraceWriter& writer, const
     : reference_(reference), writer_(writer), intervals_(withThreads(rules.intervalOptions(), threads)) {}
 
 void TraceRecorder::setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) {
-    endFrame();  // the previous frame's lists need its geometry
+    endFrame();  // the previous frame's lists
     reference_.setGeometry(positions, triangles);
-    intervals_.setGeometry(positions, triangles);
     writer_.beginFrame(frame_, positions, triangles);
 }
 
@@ -560,6 +588,14 @@ std::vector<uint64_t> TraceRecorder::execute(const CommandList& list) {
 }
 
 void TraceRecorder::endFrame() {
+    if (pending_.empty()) return;
+    // The geometry comes back from the writer's scratch file (the caller's copy is gone by now).
+    {
+        std::vector<Vec3f> positions;
+        std::vector<Triangle> triangles;
+        writer_.frameGeometry(positions, triangles);
+        intervals_.setGeometry(positions, triangles);
+    }
     // The evaluator sees the same setView/execute sequence as the reference did.
     for (const PendingList& p : pending_) {
         intervals_.setView(p.view);
@@ -572,7 +608,8 @@ void TraceRecorder::endFrame() {
         queries_ += p.results.size();
         writer_.addList(p.view, p.commands, queries);
     }
-    if (!pending_.empty()) intervals_.releaseScratch();
+    intervals_.releaseScratch();
+    intervals_.setGeometry({}, {});
     std::vector<PendingList>().swap(pending_);
 }
 

@@ -16,6 +16,7 @@
 #include <oneapi/tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdlib>
@@ -148,8 +149,12 @@ struct QueryIntervals::Impl {
     std::vector<Op> ops;
     std::vector<uint64_t> drawBase;  // base of each draw op, ascending
     std::vector<size_t> drawOp;  // its index in ops
-    std::vector<PixelRange> range;  // per instance
-    std::vector<uint8_t> clipped;  // per instance
+    // Per triangle of the geometry (set for the triangles the list draws: a triangle drawn four
+    // times is set up once).
+    std::vector<PixelRange> range;
+    std::vector<uint8_t> clipped;
+    std::vector<std::array<uint32_t, 2>> drawn;  // the union of the draws' ranges, sorted, disjoint
+    std::vector<uint64_t> drawnBase;  // per range of `drawn`: its first position in that union
     std::vector<int32_t> bandStart;  // band b: rows [bandStart[b], bandStart[b + 1])
     std::vector<int32_t> bandOfRow;
     std::vector<uint64_t> binPos;  // per (chunk, band): count, then write position
@@ -195,6 +200,17 @@ struct QueryIntervals::Impl {
             for (int j = bandStart[b]; j < bandStart[b + 1]; ++j) bandOfRow[size_t(j)] = int32_t(b);
     }
 
+    // The draw of instance k (drawBase[d] <= k), and the triangle of instance k, advancing d
+    // (instances are visited in increasing order).
+    size_t drawOf(uint64_t k) const {
+        return size_t(std::upper_bound(drawBase.begin(), drawBase.end(), k) - drawBase.begin()) - 1;
+    }
+    uint32_t triangleOf(uint64_t k, size_t& d) const {
+        while (d + 1 < drawBase.size() && drawBase[d + 1] <= k) ++d;
+        const Op& op = ops[drawOp[d]];
+        return op.first + uint32_t(k - op.base);
+    }
+
     Local& local(size_t queries, int height) {
         Local& l = locals.local();
         if (l.generation != generation) {
@@ -222,8 +238,10 @@ QueryIntervals::QueryIntervals(const IntervalOptions& options) : options_(option
 }
 
 void QueryIntervals::setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) {
-    positions_.assign(positions.begin(), positions.end());
-    triangles_.assign(triangles.begin(), triangles.end());
+    // New vectors, not assign(): a smaller geometry (the empty one a recorder sets between
+    // frames) gives its memory back.
+    positions_ = std::vector<Vec3f>(positions.begin(), positions.end());
+    triangles_ = std::vector<Triangle>(triangles.begin(), triangles.end());
 }
 
 void QueryIntervals::setView(const OrthoView& view) {
@@ -250,6 +268,8 @@ void QueryIntervals::releaseScratch() {
     std::vector<size_t>().swap(im.drawOp);
     std::vector<PixelRange>().swap(im.range);
     std::vector<uint8_t>().swap(im.clipped);
+    std::vector<std::array<uint32_t, 2>>().swap(im.drawn);
+    std::vector<uint64_t>().swap(im.drawnBase);
     std::vector<uint64_t>().swap(im.binPos);
     std::vector<uint64_t>().swap(im.bandBegin);
     std::vector<uint32_t>().swap(im.binned);
@@ -330,30 +350,43 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
             }
         });
 
-        // Phase 3: per instance, its pixel range and clipped flag (rule 2's trivial rejection
-        // first: nothing under any snapping either), and the row-work histogram.
-        im.range.resize(instances);
-        im.clipped.resize(instances);
-        parallelFor(0, instances, 4096, [&](const tbb::blocked_range<size_t>& rg) {
+        // Phase 3: per triangle drawn, its pixel range and clipped flag (rule 2's trivial
+        // rejection first: nothing under any snapping either), and the row-work histogram.
+        im.drawn.clear();
+        for (const Op& op : im.ops)
+            if (!op.clear) im.drawn.push_back({op.first, op.first + op.count});
+        std::sort(im.drawn.begin(), im.drawn.end());
+        size_t merged = 0;
+        for (const auto& d : im.drawn) {
+            if (merged > 0 && d[0] <= im.drawn[merged - 1][1])
+                im.drawn[merged - 1][1] = std::max(im.drawn[merged - 1][1], d[1]);
+            else im.drawn[merged++] = d;
+        }
+        im.drawn.resize(merged);
+        im.drawnBase.assign(merged + 1, 0);
+        for (size_t d = 0; d < merged; ++d) im.drawnBase[d + 1] = im.drawnBase[d] + (im.drawn[d][1] - im.drawn[d][0]);
+        im.range.resize(triangles_.size());
+        im.clipped.resize(triangles_.size());
+        parallelFor(0, im.drawnBase.back(), 4096, [&](const tbb::blocked_range<size_t>& rg) {
             Local& l = im.local(nq, H);
-            size_t d = size_t(std::upper_bound(im.drawBase.begin(), im.drawBase.end(), uint64_t(rg.begin())) -
-                              im.drawBase.begin()) -
+            size_t d = size_t(std::upper_bound(im.drawnBase.begin(), im.drawnBase.end(), uint64_t(rg.begin())) -
+                              im.drawnBase.begin()) -
                 1;
             for (size_t k = rg.begin(); k != rg.end(); ++k) {
-                while (d + 1 < im.drawBase.size() && im.drawBase[d + 1] <= k) ++d;
-                const Op& op = im.ops[im.drawOp[d]];
-                const Triangle& tri = triangles_[op.first + uint32_t(k - op.base)];
+                while (im.drawnBase[d + 1] <= k) ++d;
+                const uint32_t t = im.drawn[d][0] + uint32_t(k - im.drawnBase[d]);
+                const Triangle& tri = triangles_[t];
                 const Vert* v[3] = {&im.vert[tri[0]], &im.vert[tri[1]], &im.vert[tri[2]]};
-                PixelRange& pr = im.range[k];
+                PixelRange& pr = im.range[t];
                 pr = PixelRange{};
-                im.clipped[k] = 0;
+                im.clipped[t] = 0;
                 if (!(v[0]->finite && v[1]->finite && v[2]->finite)) continue;
                 const WinV &a = v[0]->w, &b = v[1]->w, &c = v[2]->w;
                 if ((a.x < 0 && b.x < 0 && c.x < 0) || (a.x > W && b.x > W && c.x > W) ||
                     (a.y < 0 && b.y < 0 && c.y < 0) || (a.y > H && b.y > H && c.y > H) ||
                     (a.z < 0 && b.z < 0 && c.z < 0) || (a.z > 1 && b.z > 1 && c.z > 1))
                     continue;
-                im.clipped[k] = !(inside(a) && inside(b) && inside(c));
+                im.clipped[t] = !(inside(a) && inside(b) && inside(c));
                 // Pixel range: the snapped bounding box grown by r units and one pixel.
                 const int64_t minx = std::min({v[0]->sx, v[1]->sx, v[2]->sx}) - r,
                               maxx = std::max({v[0]->sx, v[1]->sx, v[2]->sx}) + r;
@@ -377,7 +410,7 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
     for (const Op& op : im.ops) {
         if (op.clear) exactTrusted_ = true;
         else if (exactTrusted_) {
-            const uint8_t* c = im.clipped.data() + op.base;
+            const uint8_t* c = im.clipped.data() + op.first;
             if (std::find(c, c + op.count, uint8_t(1)) != c + op.count) exactTrusted_ = false;
         }
     }
@@ -392,8 +425,9 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
             for (size_t ch = rg.begin(); ch != rg.end(); ++ch) {
                 uint64_t* cnt = im.binPos.data() + ch * bands;
                 const size_t end = std::min<size_t>(instances, (ch + 1) * kBinChunk);
+                size_t d = im.drawOf(ch * kBinChunk);
                 for (size_t k = ch * kBinChunk; k < end; ++k) {
-                    const PixelRange& pr = im.range[k];
+                    const PixelRange& pr = im.range[im.triangleOf(k, d)];
                     if (pr.empty()) continue;
                     for (int32_t b = im.bandOfRow[size_t(pr.j0)]; b <= im.bandOfRow[size_t(pr.j1)]; ++b) ++cnt[b];
                 }
@@ -415,8 +449,9 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
             for (size_t ch = rg.begin(); ch != rg.end(); ++ch) {
                 uint64_t* at = im.binPos.data() + ch * bands;
                 const size_t end = std::min<size_t>(instances, (ch + 1) * kBinChunk);
+                size_t d = im.drawOf(ch * kBinChunk);
                 for (size_t k = ch * kBinChunk; k < end; ++k) {
-                    const PixelRange& pr = im.range[k];
+                    const PixelRange& pr = im.range[im.triangleOf(k, d)];
                     if (pr.empty()) continue;
                     for (int32_t b = im.bandOfRow[size_t(pr.j0)]; b <= im.bandOfRow[size_t(pr.j1)]; ++b)
                         im.binned[at[b]++] = uint32_t(k);
@@ -451,8 +486,8 @@ std::vector<QueryInterval> QueryIntervals::execute(const CommandList& list, std:
                     for (; it != itEnd && *it < stop; ++it) {
                         const uint32_t k = *it;
                         const uint32_t t = op.first + uint32_t(k - op.base);
-                        const PixelRange& pr = im.range[k];
-                        const bool clipped = im.clipped[k] != 0;
+                        const PixelRange& pr = im.range[t];
+                        const bool clipped = im.clipped[t] != 0;
                         const Triangle& tri = triangles_[t];
                         const Vert* vv[3] = {&im.vert[tri[0]], &im.vert[tri[1]], &im.vert[tri[2]]};
                         const WinV v[3] = {vv[0]->w, vv[1]->w, vv[2]->w};

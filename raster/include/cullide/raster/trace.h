@@ -80,8 +80,13 @@ public:
     // Writes the file. Returns its size in bytes.
     uint64_t finish();
 
+    // The current frame's geometry, read back from the scratch file.
+    void frameGeometry(std::vector<Vec3f>& positions, std::vector<Triangle>& triangles);
+
 private:
     nlohmann::ordered_json blob(const void* data, size_t bytes, const char* dtype, size_t rows, size_t cols);
+    void scratchRead(uint64_t offset, void* out, size_t bytes);
+    bool scratchEquals(uint64_t offset, const void* data, size_t bytes);
 
     std::filesystem::path path_, scratchPath_;
     std::FILE* scratch_ = nullptr;
@@ -89,7 +94,6 @@ private:
     TraceRules rules_;
     nlohmann::ordered_json workload_, provenance_;
     nlohmann::ordered_json frames_ = nlohmann::ordered_json::array();
-    std::vector<Triangle> lastTriangles_;
     nlohmann::ordered_json lastTrianglesRef_;
     uint64_t lists_ = 0, commands_ = 0, queries_ = 0, trianglesDrawn_ = 0;
     bool finished_ = false;
