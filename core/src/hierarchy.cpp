@@ -39,6 +39,7 @@ constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 // Sorts a short run (an adjacency row: three entries on a manifold mesh) and drops repeats;
 // returns the new end. Insertion sort: std::sort's setup costs more than the row.
 uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
+    if (last - first < 2) return last;  // also an empty row whose storage is still null
     for (uint32_t* i = first + 1; i < last; ++i)
         for (uint32_t* j = i; j > first && j[-1] > j[0]; --j) std::swap(j[-1], j[0]);
     return std::unique(first, last);
