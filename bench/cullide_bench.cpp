@@ -8,7 +8,9 @@
 //     (make-scene cows); method 0 = original, 1 = modified. Counters: PCS triangles, reducePCS
 //     calls, triangles rendered, queries.
 //   BM_Hierarchy/<kind>/<triangles>: building one object's hierarchy (the per-frame cost the
-//     paper's method pays instead of preprocessing); kind 0 = connectivity, 1 = random.
+//     paper's method pays instead of preprocessing); kind 0 = connectivity, 1 = random. Counter
+//     x_90b80f8 (connectivity): the CPU time of commit 90b80f8's build over this run's (see
+//     kConnectivityMs90b80f8).
 #include "cullide/cullide.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
@@ -18,7 +20,9 @@
 
 #include <benchmark/benchmark.h>
 
+#include <ctime>
 #include <map>
+#include <utility>
 
 namespace {
 
@@ -48,18 +52,40 @@ BENCHMARK(BM_Prune)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The connectivity build's CPU time per hierarchy (ms) at commit 90b80f8, before the build moved
+// to flat arrays (vectors per set and per piece, searches over triangle ids), by BM_Hierarchy's
+// triangle count. Measured on the project's 2-core shared build machine (AMD EPYC, Release,
+// GCC 12): this benchmark's binary linked against that commit's core/src/hierarchy.cpp instead
+// of today's, run with --benchmark_filter=BM_Hierarchy/kind:0 --benchmark_repetitions=3, the
+// median of the CPU column; the 1M figure in issue 16 (~770 ms) was a wall time. Ratios against
+// these mean something only on a comparable machine (the shared machine alone varies by 30%).
+// Measured 2026-11-22 at load average ~3.5 on the 2 cores.
+constexpr std::pair<int64_t, double> kConnectivityMs90b80f8[] = {{5000, 2.24}, {270000, 180.0}, {1000000, 671.0}};
+
 void BM_Hierarchy(benchmark::State& state) {
     const Scene& scene = paperScene(0, size_t(state.range(1)));
     HierarchyOptions o;
     o.kind = state.range(0) == 0 ? HierarchyKind::Connectivity : HierarchyKind::Random;
     const Mesh& mesh = scene.objects[0].mesh;
+    // Thread CPU time, not wall time: the build machine is shared, and a build descheduled for a
+    // while would otherwise look slower than it is.
+    auto threadMs = [] {
+        timespec t{};
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+        return 1e3 * double(t.tv_sec) + 1e-6 * double(t.tv_nsec);
+    };
+    const double begin = threadMs();
     for (auto _ : state) benchmark::DoNotOptimize(buildHierarchy(mesh, o));
+    const double ms = (threadMs() - begin) / double(state.iterations());
     state.counters["Mtri/s"] =
         benchmark::Counter(double(mesh.triangleCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+    for (const auto& [triangles, oldMs] : kConnectivityMs90b80f8)
+        if (o.kind == HierarchyKind::Connectivity && triangles == state.range(1))
+            state.counters["x_90b80f8"] = oldMs / ms;
 }
 BENCHMARK(BM_Hierarchy)
     ->ArgNames({"kind", "tris"})
-    ->ArgsProduct({{0, 1}, {5000, 270000}})
+    ->ArgsProduct({{0, 1}, {5000, 270000, 1000000}})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -10,9 +10,9 @@
 #include "cullide/error.h"
 
 #include <algorithm>
-#include <deque>
 #include <limits>
 #include <random>
+#include <span>
 
 namespace cullide {
 
@@ -36,58 +36,35 @@ namespace {
 
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 
-// Face adjacency through shared edges (by vertex index), as compressed rows, neighbours in
-// increasing triangle order. Triangles on a non-manifold edge are all adjacent to each other;
-// degenerate edges (a == b) connect nothing. Built from the vertex -> triangle incidence (linear
-// time, no sort): the triangles sharing edge (a, b) are among those incident to a.
-struct Adjacency {
-    std::vector<uint32_t> start, next;
+// Sorts a short run (an adjacency row: three entries on a manifold mesh) and drops repeats;
+// returns the new end. Insertion sort: std::sort's setup costs more than the row.
+uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
+    if (last - first < 2) return last;  // also an empty row whose storage is still null
+    for (uint32_t* i = first + 1; i < last; ++i)
+        for (uint32_t* j = i; j > first && j[-1] > j[0]; --j) std::swap(j[-1], j[0]);
+    return std::unique(first, last);
+}
 
-    explicit Adjacency(const Mesh& mesh) {
-        const size_t n = mesh.triangles.size(), nv = mesh.positions.size();
-        std::vector<uint32_t> vstart(nv + 1, 0), incident;
-        for (const Triangle& tri : mesh.triangles)
-            for (uint32_t v : tri) ++vstart[v + 1];
-        for (size_t v = 0; v < nv; ++v) vstart[v + 1] += vstart[v];
-        incident.resize(vstart[nv]);
-        std::vector<uint32_t> fill(vstart.begin(), vstart.end() - 1);
-        for (uint32_t t = 0; t < n; ++t)
-            for (uint32_t v : mesh.triangles[t]) incident[fill[v]++] = t;  // increasing t per vertex
-
-        start.assign(n + 1, 0);
-        next.reserve(3 * n);
-        std::vector<uint32_t> row;
-        for (uint32_t t = 0; t < n; ++t) {
-            const Triangle& tri = mesh.triangles[t];
-            row.clear();
-            for (int e = 0; e < 3; ++e) {
-                const uint32_t a = tri[e], b = tri[(e + 1) % 3];
-                if (a == b) continue;
-                for (uint32_t k = vstart[a]; k < vstart[a + 1]; ++k) {
-                    const uint32_t u = incident[k];
-                    if (u == t) continue;
-                    const Triangle& other = mesh.triangles[u];
-                    if (other[0] == b || other[1] == b || other[2] == b) row.push_back(u);
-                }
-            }
-            std::sort(row.begin(), row.end());
-            row.erase(std::unique(row.begin(), row.end()), row.end());
-            next.insert(next.end(), row.begin(), row.end());
-            start[t + 1] = uint32_t(next.size());
-        }
-    }
-};
-
+// Builds the hierarchy over flat arrays sized once per build (no allocation per node).
+//
+// Connectivity works in position space: a node, and every part of its recursive bisection, is a
+// range [lo, hi) of positions in out_.order, and its face adjacency is kept restricted to that
+// range: the row of position p holds the positions of p's neighbours inside the range, in
+// increasing order of their triangle ids (the order of the searches this follows). After each
+// bisection the rows of both halves are rebuilt, restricted to themselves. So a search needs no
+// membership test, and a patch's triangles sit next to each other in memory.
+//
+// A row is three slots (a triangle has three edges), unused ones holding the position itself: a
+// triangle is labelled kVisited before its row is read, so it never passes for an open or first
+// neighbour; searches run without branches on row lengths, and a rebuild is a scatter by new
+// position. (One shared sentinel position would chain every search step through its label.)
+// A triangle with more than three neighbours (on a non-manifold edge) has slot 0 = kEscape and
+// its neighbours' triangle ids in overflow_ (slots 1, 2: offset and count), found through posOf_
+// (triangle id -> position) and tested against the range.
 class Builder {
 public:
     Builder(const Mesh& mesh, const HierarchyOptions& options, Hierarchy& out)
-        : mesh_(mesh), opt_(options), out_(out), rng_(options.seed) {
-        const size_t n = mesh.triangles.size();
-        if (opt_.kind == HierarchyKind::Connectivity) {
-            adjacency_.emplace_back(mesh);
-            label_.assign(n, kNone);
-        }
-    }
+        : mesh_(mesh), opt_(options), out_(out), rng_(options.seed) {}
 
     void build() {
         const uint32_t n = uint32_t(mesh_.triangles.size());
@@ -99,6 +76,14 @@ public:
         }
         out_.nodes.clear();
         out_.nodes.push_back({0, n, 0, 0, 0});
+        if (n <= opt_.leafSize) return;  // a leaf root: no adjacency to build
+        if (opt_.kind == HierarchyKind::Connectivity) {
+            CULLIDE_CHECK(n < kFirst, "triangle count leaves room for the labels");
+            buildAdjacency();
+            mark_.resize(n);
+            queue_.resize(n + 1);  // + 1: a search writes one past its last entry
+            tmp_.resize(n + 1);
+        }
         split(0);
     }
 
@@ -111,123 +96,249 @@ private:
         return uint32_t(x % bound);
     }
 
+    // Face adjacency through shared edges (by vertex index), neighbours in increasing triangle
+    // order. Triangles on a non-manifold edge are all adjacent to each other; degenerate edges
+    // (a == b) connect nothing. Built from the vertex -> triangle incidence (linear time): the
+    // triangles sharing edge (a, b) are among those incident to a. Positions are triangle ids at
+    // the root.
+    void buildAdjacency() {
+        const uint32_t n = uint32_t(mesh_.triangles.size());
+        const size_t nv = mesh_.positions.size();
+        std::vector<uint32_t> vstart(nv + 1, 0);
+        for (const Triangle& tri : mesh_.triangles)
+            for (uint32_t v : tri) ++vstart[v + 1];
+        for (size_t v = 0; v < nv; ++v) vstart[v + 1] += vstart[v];
+        std::vector<uint32_t> incident(vstart[nv]);
+        // Fill by advancing each vertex's start to its end, then shift the starts back: no array
+        // of cursors.
+        for (uint32_t t = 0; t < n; ++t)
+            for (uint32_t v : mesh_.triangles[t]) incident[vstart[v]++] = t;  // increasing t per vertex
+        for (size_t v = nv; v > 0; --v) vstart[v] = vstart[v - 1];
+        vstart[0] = 0;
+
+        slots_.resize(3 * size_t(n));
+        overflow_.clear();
+        std::vector<uint32_t> row;
+        for (uint32_t t = 0; t < n; ++t) {
+            const Triangle& tri = mesh_.triangles[t];
+            row.clear();
+            for (int e = 0; e < 3; ++e) {
+                const uint32_t a = tri[e], b = tri[(e + 1) % 3];
+                if (a == b) continue;
+                for (uint32_t k = vstart[a]; k < vstart[a + 1]; ++k) {
+                    const uint32_t u = incident[k];
+                    if (u == t) continue;
+                    const Triangle& other = mesh_.triangles[u];
+                    if (other[0] == b || other[1] == b || other[2] == b) row.push_back(u);
+                }
+            }
+            row.resize(size_t(sortUnique(row.data(), row.data() + row.size()) - row.data()));
+            uint32_t* slot = slots_.data() + 3 * size_t(t);
+            if (row.size() <= 3) {
+                for (size_t i = 0; i < 3; ++i) slot[i] = i < row.size() ? row[i] : t;
+            } else {
+                CULLIDE_CHECK(overflow_.size() + row.size() < kNone, "overflow rows fit 32-bit offsets");
+                slot[0] = kEscape, slot[1] = uint32_t(overflow_.size()), slot[2] = uint32_t(row.size());
+                overflow_.insert(overflow_.end(), row.begin(), row.end());
+            }
+        }
+        if (!overflow_.empty()) {
+            posOf_.resize(n);
+            for (uint32_t t = 0; t < n; ++t) posOf_[t] = t;
+        }
+        // Rebuilt rows are written aside, then copied back: the incidence array (3n entries, as
+        // many as the slots) serves for that.
+        tmpSlots_ = std::move(incident);
+    }
+
     void split(uint32_t nodeIndex) {
         const HierarchyNode node = out_.nodes[nodeIndex];
         if (node.count <= opt_.leafSize) return;
         const uint32_t k = std::min<uint32_t>(opt_.branching, node.count);
-        std::span<uint32_t> set(out_.order.data() + node.first, node.count);
-        std::vector<uint32_t> sizes;
+        // sizes_ is a stack: this node's children stay on it while their subtrees push theirs.
+        const size_t base = sizes_.size();
         if (opt_.kind == HierarchyKind::Connectivity) {
-            partition(set, k, sizes);
+            partition(node.first, node.first + node.count, k, kNone);
         } else {
-            for (uint32_t i = 0; i < k; ++i) sizes.push_back(node.count / k + (i < node.count % k ? 1 : 0));
+            for (uint32_t i = 0; i < k; ++i) sizes_.push_back(node.count / k + (i < node.count % k ? 1 : 0));
         }
 
         const uint32_t firstChild = uint32_t(out_.nodes.size());
+        const uint32_t childCount = uint32_t(sizes_.size() - base);
         out_.nodes[nodeIndex].firstChild = firstChild;
-        out_.nodes[nodeIndex].childCount = uint32_t(sizes.size());
+        out_.nodes[nodeIndex].childCount = childCount;
         uint32_t first = node.first;
-        for (uint32_t size : sizes) {
+        for (size_t i = base; i < sizes_.size(); ++i) {
+            const uint32_t size = sizes_[i];
             CULLIDE_CHECK(size > 0 && size < node.count, "a child is smaller than its parent and not empty");
             out_.nodes.push_back({first, size, 0, 0, node.depth + 1});
             first += size;
         }
-        for (uint32_t i = 0; i < sizes.size(); ++i) split(firstChild + i);
+        sizes_.resize(base);
+        for (uint32_t i = 0; i < childCount; ++i) split(firstChild + i);
     }
 
-    std::span<const uint32_t> neighbours(uint32_t t) const {
-        const Adjacency& adj = adjacency_.front();
-        return {adj.next.data() + adj.start[t], adj.start[t + 1] - adj.start[t]};
+    // Calls f(q) for the neighbours q of position p in the range [lo, hi), in increasing order
+    // of triangle id, and for p itself in unused slots (p is labelled kVisited by then).
+    template <class F>
+    void forNeighbours(uint32_t p, uint32_t lo, uint32_t hi, F&& f) const {
+        const uint32_t* slot = slots_.data() + 3 * size_t(p);
+        if (slot[0] != kEscape) {
+            f(slot[0]), f(slot[1]), f(slot[2]);
+            return;
+        }
+        for (uint32_t i = slot[1]; i < slot[1] + slot[2]; ++i) {
+            const uint32_t q = posOf_[overflow_[i]];
+            if (q >= lo && q < hi) f(q);
+        }
     }
 
-    // Reorders `set` into k consecutive parts (appending their sizes to `sizes`), each a compact
-    // patch connected through shared edges where the mesh allows: recursive graph-growing
-    // bisection. The first part of a bisection is a prefix of the breadth-first order from a
-    // pseudo-peripheral triangle (a prefix of a breadth-first order is connected), sized in
-    // proportion to its share of the k parts; the second part is the rest, whose stray pieces
-    // (cut off from its largest piece, so bordered by the first part) move to the first part.
-    // Sizes are therefore near-equal, not exact.
-    // `hint`: a triangle of `set` on its periphery, when the caller knows one (kNone otherwise).
-    void partition(std::span<uint32_t> set, uint32_t k, std::vector<uint32_t>& sizes, uint32_t hint = kNone) {
-        if (k < 2 || set.size() < 2) {
-            sizes.push_back(uint32_t(set.size()));
+    // Breadth-first search over kOpen positions of [lo, hi), labelling them kVisited: the queue
+    // holds [head, size); returns its new end. Branch-free: whether a neighbour is open is a coin
+    // toss the branch predictor loses, so each neighbour is written at the queue's end and kept
+    // only if it was open.
+    uint32_t grow(uint32_t* queue, uint32_t head, uint32_t size, uint32_t lo, uint32_t hi) {
+        uint32_t* mark = mark_.data();
+        for (; head < size; ++head)
+            forNeighbours(queue[head], lo, hi, [&](uint32_t u) {
+                const uint32_t label = mark[u];
+                queue[size] = u;
+                size += label == kOpen;
+                mark[u] = label == kOpen ? kVisited : label;
+            });
+        return size;
+    }
+
+    // Whether a part of a bisection will be bisected again, or become a node that is split: only
+    // then does it need rows.
+    bool needsRows(uint32_t count, uint32_t k) const { return count > opt_.leafSize || (k >= 2 && count >= 2); }
+
+    // Reorders the positions [lo, hi) into k consecutive parts (their sizes pushed on sizes_),
+    // each a compact patch connected through shared edges where the mesh allows: recursive
+    // graph-growing bisection. The first part of a bisection is a prefix of the breadth-first
+    // order from a pseudo-peripheral triangle (a prefix of a breadth-first order is connected),
+    // sized in proportion to its share of the k parts; the second part is the rest, whose stray
+    // pieces (cut off from its largest piece, so bordered by the first part) move to the first
+    // part. Sizes are therefore near-equal, not exact.
+    // `hint`: a position on the range's periphery, when the caller knows one (kNone otherwise).
+    void partition(uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint) {
+        const uint32_t n = hi - lo;
+        if (k < 2 || n < 2) {
+            sizes_.push_back(n);
             return;
         }
         const uint32_t half = k / 2;
-        const size_t target = std::max<size_t>(1, set.size() * half / k);
+        const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
 
-        for (uint32_t t : set) label_[t] = kOpen;
-        const uint32_t seed = hint != kNone ? hint : farthest(set[0]);
-        // Breadth-first order over the set from the seed; when a component is exhausted, go on
-        // from the first unvisited triangle of the set (in set order).
-        std::vector<uint32_t> bfs;
-        bfs.reserve(set.size());
-        size_t scan = 0;
-        uint32_t start = seed;
-        while (bfs.size() < set.size()) {
-            label_[start] = kVisited;
-            bfs.push_back(start);
-            for (size_t head = bfs.size() - 1; head < bfs.size(); ++head)
-                for (uint32_t u : neighbours(bfs[head]))
-                    if (label_[u] == kOpen) label_[u] = kVisited, bfs.push_back(u);
-            while (scan < set.size() && label_[set[scan]] != kOpen) ++scan;
-            if (scan < set.size()) start = set[scan];
+        std::fill(mark_.begin() + lo, mark_.begin() + hi, kOpen);
+        const uint32_t seed = hint != kNone ? hint : farthest(lo, hi);
+        // Breadth-first order over the range from the seed; when a component is exhausted, go on
+        // from the first unvisited position.
+        uint32_t* bfs = queue_.data();
+        uint32_t size = 0, scan = lo, start = seed;
+        while (size < n) {
+            mark_[start] = kVisited;
+            bfs[size++] = start;
+            size = grow(bfs, size - 1, size, lo, hi);
+            while (scan < hi && mark_[scan] != kOpen) ++scan;
+            if (scan < hi) start = scan;
         }
 
-        // Label the first part kFirst, then find the pieces of the rest.
-        for (size_t i = 0; i < bfs.size(); ++i) label_[bfs[i]] = i < target ? kFirst : kOpen;
-        std::vector<std::vector<uint32_t>> pieces;
-        for (size_t i = target; i < bfs.size(); ++i) {
-            if (label_[bfs[i]] != kOpen) continue;
-            std::vector<uint32_t>& piece = pieces.emplace_back(1, bfs[i]);
-            label_[bfs[i]] = kVisited;
-            for (size_t head = 0; head < piece.size(); ++head)
-                for (uint32_t u : neighbours(piece[head]))
-                    if (label_[u] == kOpen) label_[u] = kVisited, piece.push_back(u);
+        // Label the first part kFirst, then find the pieces of the rest, one after another in tmp_.
+        for (uint32_t i = 0; i < n; ++i) mark_[bfs[i]] = i < target ? kFirst : kOpen;
+        uint32_t* pieces = tmp_.data();
+        uint32_t pieceEnd = 0;
+        pieceStart_.clear();
+        for (uint32_t i = target; i < n; ++i) {
+            if (mark_[bfs[i]] != kOpen) continue;
+            pieceStart_.push_back(pieceEnd);
+            mark_[bfs[i]] = kVisited;
+            pieces[pieceEnd++] = bfs[i];
+            pieceEnd = grow(pieces, pieceEnd - 1, pieceEnd, lo, hi);
         }
+        pieceStart_.push_back(pieceEnd);
+        const size_t pieceCount = pieceStart_.size() - 1;
+        auto pieceSize = [&](size_t p) { return pieceStart_[p + 1] - pieceStart_[p]; };
         size_t largest = 0;
-        for (size_t p = 1; p < pieces.size(); ++p)
-            if (pieces[p].size() > pieces[largest].size()) largest = p;
-        std::vector<uint32_t> first(bfs.begin(), bfs.begin() + target), second;
-        for (size_t p = 0; p < pieces.size(); ++p) {
+        for (size_t p = 1; p < pieceCount; ++p)
+            if (pieceSize(p) > pieceSize(largest)) largest = p;
+
+        // The new order, in bfs: the first part (its prefix is in place), then the second.
+        moved_.assign(pieceCount, 0);
+        uint32_t f = target;
+        for (size_t p = 0; p < pieceCount; ++p) {
+            if (p == largest) continue;  // stays in the second part whatever it touches
             bool touchesFirst = false;
-            for (uint32_t t : pieces[p])
-                for (uint32_t u : neighbours(t)) touchesFirst = touchesFirst || label_[u] == kFirst;
-            std::vector<uint32_t>& to = (p != largest && touchesFirst) ? first : second;
-            to.insert(to.end(), pieces[p].begin(), pieces[p].end());
+            for (uint32_t i = pieceStart_[p]; i < pieceStart_[p + 1] && !touchesFirst; ++i)
+                forNeighbours(pieces[i], lo, hi, [&](uint32_t u) { touchesFirst |= mark_[u] == kFirst; });
+            if (!touchesFirst) continue;
+            moved_[p] = 1;
+            f = uint32_t(std::copy(pieces + pieceStart_[p], pieces + pieceStart_[p + 1], bfs + f) - bfs);
         }
-        for (uint32_t t : set) label_[t] = kNone;
-        std::copy(second.begin(), second.end(), std::copy(first.begin(), first.end(), set.begin()));
+        for (size_t p = 0, s = f; p < pieceCount; ++p)
+            if (!moved_[p]) s = std::copy(pieces + pieceStart_[p], pieces + pieceStart_[p + 1], bfs + s) - bfs;
+
+        // Apply it. mark_ maps each old position to its new one, and the triangle ids and rows
+        // are scattered by it (reading old positions in order, where a gather by new position
+        // would read them at random).
+        for (uint32_t j = 0; j < n; ++j) mark_[bfs[j]] = lo + j;
+        for (uint32_t p = lo; p < hi; ++p) tmp_[mark_[p] - lo] = out_.order[p];
+        std::copy(tmp_.begin(), tmp_.begin() + n, out_.order.begin() + lo);
+        if (!posOf_.empty())
+            for (uint32_t p = lo; p < hi; ++p) posOf_[out_.order[p]] = p;
+        if (needsRows(f, half) || needsRows(n - f, k - half)) {
+            // Each half's rows keep the neighbours in that half, in place (the position itself
+            // elsewhere).
+            const uint32_t mid = lo + f;
+            for (uint32_t p = lo; p < hi; ++p) {
+                const uint32_t np = mark_[p];
+                const uint32_t a = np < mid ? lo : mid, b = np < mid ? mid : hi;
+                const uint32_t* slot = slots_.data() + 3 * size_t(p);
+                uint32_t* out = tmpSlots_.data() + 3 * size_t(np - lo);
+                if (slot[0] == kEscape) {
+                    std::copy(slot, slot + 3, out);
+                    continue;
+                }
+                for (int i = 0; i < 3; ++i) {
+                    const uint32_t q = mark_[slot[i]];
+                    out[i] = q >= a && q < b ? q : np;
+                }
+            }
+            std::copy(tmpSlots_.begin(), tmpSlots_.begin() + 3 * size_t(n), slots_.begin() + 3 * size_t(lo));
+        }
+
         // Peripheral starts for the halves, for free: the first part is a ball around the seed
         // whose last-reached triangle lies on its rim; the second part's first triangle borders
         // the first part. (The second part is a breadth-first order too, so its rim is its end.)
-        const uint32_t firstHint = first.back(), secondHint = second.back();
-        partition(set.subspan(0, first.size()), half, sizes, firstHint);
-        partition(set.subspan(first.size()), k - half, sizes, secondHint);
+        partition(lo, lo + f, half, lo + f - 1);
+        partition(lo + f, hi, k - half, hi - 1);
     }
 
-    // The triangle labelled kOpen farthest in hops from `from` over kOpen triangles (ties: the
-    // last reached in breadth-first order). Leaves the labels as they were.
-    uint32_t farthest(uint32_t from) {
-        std::vector<uint32_t>& queue = scratch_;
-        queue.clear();
-        queue.push_back(from);
-        label_[from] = kVisited;
-        for (size_t head = 0; head < queue.size(); ++head)
-            for (uint32_t u : neighbours(queue[head]))
-                if (label_[u] == kOpen) label_[u] = kVisited, queue.push_back(u);
-        for (uint32_t t : queue) label_[t] = kOpen;
-        return queue.back();
+    // The position of [lo, hi) farthest in hops from `from` (ties: the last reached in
+    // breadth-first order). Expects the range labelled kOpen and leaves it so.
+    uint32_t farthest(uint32_t from, uint32_t hi) {
+        uint32_t* queue = queue_.data();
+        queue[0] = from;
+        mark_[from] = kVisited;
+        const uint32_t size = grow(queue, 0, 1, from, hi);  // from is the range's first position
+        std::fill(mark_.begin() + from, mark_.begin() + hi, kOpen);
+        return queue[size - 1];
     }
 
     static constexpr uint32_t kOpen = kNone - 1, kVisited = kNone - 2, kFirst = kNone - 3;
+    static constexpr uint32_t kEscape = kNone;  // slot 0 of a row kept in overflow_
 
     const Mesh& mesh_;
     HierarchyOptions opt_;
     Hierarchy& out_;
     std::mt19937_64 rng_;
-    std::vector<Adjacency> adjacency_;  // empty for Random
-    std::vector<uint32_t> label_, scratch_;
+    std::vector<uint32_t> sizes_;
+    // Connectivity only. By position: slots_ (rows, 3 each; tmpSlots_ while rebuilding), mark_
+    // (labels during a bisection, then old -> new position), queue_
+    // (breadth-first order, then the new order), tmp_ (pieces, then triangle ids). By triangle
+    // id, only when some row overflows: posOf_.
+    std::vector<uint32_t> slots_, tmpSlots_, overflow_, posOf_, mark_, queue_, tmp_, pieceStart_;
+    std::vector<uint8_t> moved_;
 };
 
 }  // namespace
