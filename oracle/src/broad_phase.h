@@ -1,6 +1,7 @@
 // The oracle's broad phase: Embree 3's rtcCollide on user geometry (internal to oracle/).
 #pragma once
 
+#include <bit>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -11,6 +12,20 @@ namespace cullide::oracle::detail {
 struct Box {
     float lo[3], hi[3];
 };
+
+// The float below / above x (std::nextafter toward -inf / +inf, which is a libm call per corner:
+// 1.5% of the oracle on small meshes), for finite x only: -0 and +0 both step to the smallest
+// denormal of the side asked for, as nextafter does.
+inline float roundDown(float x) {
+    const uint32_t b = std::bit_cast<uint32_t>(x);
+    if (x == 0) return std::bit_cast<float>(uint32_t(0x80000001));
+    return std::bit_cast<float>(x > 0 ? b - 1 : b + 1);
+}
+inline float roundUp(float x) {
+    const uint32_t b = std::bit_cast<uint32_t>(x);
+    if (x == 0) return std::bit_cast<float>(uint32_t(0x00000001));
+    return std::bit_cast<float>(x > 0 ? b + 1 : b - 1);
+}
 
 // One candidate pair: object (Embree geometry) and primitive indices of both sides. Same layout
 // as RTCCollision.
