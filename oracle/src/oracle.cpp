@@ -38,21 +38,7 @@ constexpr double kMaxCoordinate = 0x1p60;
 
 using detail::Prim;  // what the narrow phase reads of one primitive (narrow_phase.h)
 
-// An array whose trivial elements start unwritten (new T[n] default-initialises; aligned as T
-// asks): the parallel loops that fill it touch its fresh pages first, not a serial memset.
-template <typename T>
-struct Buffer {
-    std::unique_ptr<T[]> data_;
-    size_t size_ = 0;
-    Buffer() = default;
-    explicit Buffer(size_t n) : data_(new T[n]), size_(n) {}
-    T* data() { return data_.get(); }
-    const T* data() const { return data_.get(); }
-    size_t size() const { return size_; }
-    T& operator[](size_t i) { return data_[i]; }
-    const T& operator[](size_t i) const { return data_[i]; }
-    operator std::span<const T>() const { return {data_.get(), size_}; }
-};
+using detail::Buffer;
 
 struct ObjectData {
     Buffer<Prim> prims;  // Embree primitive order = ascending triangle index
