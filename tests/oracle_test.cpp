@@ -11,11 +11,14 @@
 
 #include "test_util.h"
 
+#include "../oracle/src/broad_phase.h"
+
 #include <gtest/gtest.h>
 
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -222,6 +225,98 @@ TEST(Oracle, BroadPhaseMatchesAllPairs) {
         const Truth t = findIntersections(scene, o);
         EXPECT_EQ(t.pairs, expected) << toString(b);
     }
+}
+
+// Trap: the box corners' outward rounding is written on the float's bits (std::nextafter was a
+// libm call per corner): +0 and -0 must both step to the smallest denormal of the side asked
+// for, a negative float must grow in magnitude going down, a denormal must step to zero; a slip
+// lets boxes that only touch miss each other.
+TEST(OracleBroadPhase, OutwardRoundingIsNextafter) {
+    const float inf = std::numeric_limits<float>::infinity();
+    const float denormal = std::numeric_limits<float>::denorm_min(), normal = std::numeric_limits<float>::min();
+    std::vector<float> xs = {0.0f, -0.0f, denormal, -denormal, normal, -normal, 1, -1, 0x1p60f, -0x1p60f, 0.1f, -3.5f};
+    std::mt19937 rng(5);
+    while (xs.size() < 20000) {
+        const float x = std::bit_cast<float>(uint32_t(rng()));
+        if (std::isfinite(x) && std::abs(x) <= 0x1p60f) xs.push_back(x);
+    }
+    for (float x : xs) {
+        EXPECT_EQ(std::bit_cast<uint32_t>(detail::roundDown(x)), std::bit_cast<uint32_t>(std::nextafter(x, -inf))) << x;
+        EXPECT_EQ(std::bit_cast<uint32_t>(detail::roundUp(x)), std::bit_cast<uint32_t>(std::nextafter(x, inf))) << x;
+    }
+}
+
+// Trap: the oracle's arrays come from posix_memalign, not new T[n]: an empty one must still be
+// valid, each must keep its type's alignment (the 64-byte primitive records), and one of 2 MiB
+// or more (huge pages advised) must start on a 2 MiB boundary and be writable to its end.
+TEST(OracleBroadPhase, BuffersKeepAlignment) {
+    struct alignas(64) Record {
+        float x[16];
+    };
+    for (size_t n : {size_t(0), size_t(1), size_t(1000), size_t(40000)}) {
+        detail::Buffer<Record> b(n);
+        ASSERT_NE(b.data(), nullptr);
+        EXPECT_EQ(b.size(), n);
+        EXPECT_EQ(reinterpret_cast<uintptr_t>(b.data()) % 64, 0u);
+        if (n * sizeof(Record) >= (size_t(2) << 20)) {
+            EXPECT_EQ(reinterpret_cast<uintptr_t>(b.data()) % (2 << 20), 0u);
+        }
+        for (size_t i = 0; i < n; ++i) b[i].x[15] = float(i);
+        if (n > 0) {
+            EXPECT_EQ(b[n - 1].x[15], float(n - 1));
+        }
+    }
+    detail::Buffer<uint64_t> moved(5000);
+    moved = {};  // released through std::free
+    EXPECT_EQ(moved.size(), 0u);
+}
+
+// Trap: radixSortHigh sorts small buckets by insertion and larger ones by LSD passes; both must
+// be stable on bits [32, 32 + keyBits) only and leave every bucket in the array the returned
+// pointer names (uniform keys: small buckets; keys below 2^(keyBits - 8): one bucket holds all).
+TEST(OracleBroadPhase, RadixSortIsStableOnTheKey) {
+    std::mt19937_64 rng(7);
+    for (size_t n : {size_t(0), size_t(1), size_t(5), size_t(300), size_t(5000), size_t(200000)})
+        for (int keyBits : {0, 7, 8, 13, 22, 30})
+            for (bool skewed : {false, true}) {
+                const int bits = skewed ? std::max(0, keyBits - 8) : keyBits;
+                std::vector<uint64_t> v(n), tmp(n);
+                // The low 32 bits count up: a stable sort on the key is the sort on the whole value.
+                for (size_t i = 0; i < n; ++i) v[i] = (bits == 0 ? 0 : rng() >> (64 - bits)) << 32 | i;
+                std::vector<uint64_t> expected = v;
+                std::sort(expected.begin(), expected.end());
+                const uint64_t* out = detail::radixSortHigh(v.data(), tmp.data(), n, keyBits);
+                EXPECT_TRUE(std::equal(expected.begin(), expected.end(), out))
+                    << "n " << n << ", keyBits " << keyBits << ", skewed " << skewed;
+            }
+}
+
+// Trap: the grid's entries are written straight into their top-digit buckets and its cells are
+// walked per fixed block of entries: a cell that straddles a block boundary (a dense cluster
+// puts thousands of entries in one cell), small and large buckets, a key over 16 bits (many
+// cells), boxes set aside (over 64 cells) and two objects must still give exactly Embree's
+// candidate pairs and truth.
+TEST(OracleBroadPhase, GridMatchesEmbreeOnManyCells) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0, 1);
+    std::vector<Mesh> meshes(2);
+    auto add = [&](Mesh& m, const Vec3f& c, float size) {
+        const uint32_t base = uint32_t(m.positions.size());
+        for (int k = 0; k < 3; ++k)
+            m.positions.push_back(c + size * Vec3f(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
+        m.triangles.push_back({base, base + 1, base + 2});
+    };
+    for (int t = 0; t < 20000; ++t) add(meshes[t % 2], Vec3f(u(rng), u(rng), u(rng)), 0.01f);  // scattered
+    for (int t = 0; t < 2500; ++t)  // a dense cluster
+        add(meshes[t % 2], Vec3f(0.5f, 0.5f, 0.5f) + 0.01f * Vec3f(u(rng), u(rng), u(rng)), 0.01f);
+    for (int t = 0; t < 4; ++t) add(meshes[t % 2], Vec3f(u(rng), u(rng), u(rng)), 0.5f);  // set aside
+    const Scene scene = sceneOf(meshes);
+    OracleOptions grid, embree;
+    embree.broadPhase = BroadPhase::Embree;
+    const Truth g = findIntersections(scene, grid), e = findIntersections(scene, embree);
+    EXPECT_GT(g.pairs.size(), 10000u);
+    EXPECT_EQ(g.candidatePairs, e.candidatePairs);
+    EXPECT_EQ(g.pairs, e.pairs);
 }
 
 // Bad input is refused before it reaches Embree (which would drop it silently).

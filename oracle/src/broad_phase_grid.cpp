@@ -37,12 +37,51 @@ struct Grid {
     double origin[3];
     double inv;  // 1 / cell size
     uint32_t dims[3];
+    // floor((x - origin) * inv), clamped to the grid: the truncation equals the floor where it
+    // is kept (c > 0), and std::floor is a libm call on the x86-64 baseline.
     uint32_t cell(float x, int k) const {
-        const double c = std::floor((double(x) - origin[k]) * inv);
+        const double c = (double(x) - origin[k]) * inv;
         return c <= 0 ? 0 : c >= double(dims[k] - 1) ? dims[k] - 1 : uint32_t(c);
     }
     uint64_t key(uint32_t x, uint32_t y, uint32_t z) const { return (uint64_t(x) * dims[1] + y) * dims[2] + z; }
 };
+
+}  // namespace
+
+namespace {
+
+// Sorts the m values at `from` by the bits [32, 32 + 8 * lowPasses) (stable), leaving them in
+// `from` when lowPasses is even and in `to` when odd (`to`: m values of scratch). LSD passes of
+// one byte each; a small bucket (most of them on small meshes, where the 256 counters of each
+// pass cost more than the values) by insertion, then copied where the passes would end.
+void sortBucket(uint64_t* from, uint64_t* to, size_t m, int lowPasses) {
+    if (lowPasses == 0 || m == 0) return;
+    if (m <= 64) {
+        const uint64_t mask = lowPasses >= 4 ? ~uint64_t(0) : (uint64_t(1) << (8 * lowPasses)) - 1;
+        auto key = [&](uint64_t x) { return (x >> 32) & mask; };
+        for (size_t i = 1; i < m; ++i) {
+            const uint64_t x = from[i];
+            size_t j = i;
+            for (; j > 0 && key(from[j - 1]) > key(x); --j) from[j] = from[j - 1];
+            from[j] = x;
+        }
+        if (lowPasses % 2 == 1) std::copy(from, from + m, to);
+        return;
+    }
+    for (int p = 0; p < lowPasses; ++p) {
+        const int shift = 32 + 8 * p;
+        size_t c[256] = {};
+        for (size_t i = 0; i < m; ++i) ++c[(from[i] >> shift) & 0xff];
+        size_t at = 0;
+        for (size_t& k : c) {
+            const size_t x = k;
+            k = at;
+            at += x;
+        }
+        for (size_t i = 0; i < m; ++i) to[c[(from[i] >> shift) & 0xff]++] = from[i];
+        std::swap(from, to);
+    }
+}
 
 }  // namespace
 
@@ -78,24 +117,8 @@ uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits) {
     });
     if (passes == 1) return tmp;
     // Every bucket takes passes - 1 more passes between tmp and v, so all end in the same array.
-    parallelForEach(0, 256, [&](size_t d) {
-        uint64_t* from = tmp + bucket[d];
-        uint64_t* to = v + bucket[d];
-        const size_t m = bucket[d + 1] - bucket[d];
-        for (int p = 0; p + 1 < passes; ++p) {
-            const int shift = 32 + 8 * p;
-            size_t c[256] = {};
-            for (size_t i = 0; i < m; ++i) ++c[(from[i] >> shift) & 0xff];
-            size_t at = 0;
-            for (size_t& k : c) {
-                const size_t x = k;
-                k = at;
-                at += x;
-            }
-            for (size_t i = 0; i < m; ++i) to[c[(from[i] >> shift) & 0xff]++] = from[i];
-            std::swap(from, to);
-        }
-    });
+    parallelForEach(
+        0, 256, [&](size_t d) { sortBucket(tmp + bucket[d], v + bucket[d], bucket[d + 1] - bucket[d], passes - 1); });
     return passes % 2 == 1 ? tmp : v;
 }
 
@@ -132,7 +155,7 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     constexpr size_t kBlock = 16384;
     const size_t blocks = (n + kBlock - 1) / kBlock;
     std::vector<std::array<double, 6>> blockBounds(blocks);
-    std::unique_ptr<float[]> extent(new float[n]);
+    Buffer<float> extent(n);
     parallelForEach(0, blocks, [&](size_t blk) {
         std::array<double, 6> bb{1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
         for (size_t g = blk * kBlock, e = std::min(n, g + kBlock); g < e; ++g) {
@@ -146,11 +169,11 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
     for (const auto& bb : blockBounds)
         for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], bb[k]), hi[k] = std::max(hi[k], bb[3 + k]);
-    std::nth_element(extent.get(), extent.get() + n / 2, extent.get() + n);
+    std::nth_element(extent.data(), extent.data() + n / 2, extent.data() + n);
     // 1.5 x the median extent: on bunny75k, 1 costs 10% more, 0.75 35% more, 0.5 sets most boxes
     // aside (over kMaxCellsPerBox cells); 2 and 2.5 cost the same within noise.
     double size = std::max(double(extent[n / 2]) * 1.5, 1e-30);
-    extent.reset();
+    extent = {};
     Grid grid;
     for (;;) {
         double cells = 1;
@@ -164,58 +187,80 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     int keyBits = 0;
     while (keyBits < 32 && (uint64_t(1) << keyBits) < cellCount) ++keyBits;
 
-    // Entries (key << 32 | low << 29 | g), in g order; boxes over too many cells set aside. The
-    // buffers are not value-initialised (every element is written): the parallel loops touch
-    // them first.
-    std::unique_ptr<size_t[]> first(new size_t[n + 1]);
-    first[0] = 0;
-    parallelFor(0, n, 4096, [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t g = r.begin(); g != r.end(); ++g) {
-            uint64_t c = 1;
-            for (int k = 0; k < 3; ++k) c *= grid.cell(boxes[g].hi[k], k) - grid.cell(boxes[g].lo[k], k) + 1;
-            first[g + 1] = c > kMaxCellsPerBox ? 0 : size_t(c);
+    // Entries (key << 32 | low << 29 | g), sorted by key, g ascending within a cell (the pair
+    // loop reports (a, b) with a < b); boxes over too many cells set aside. The first pass of
+    // radixSortHigh (the top digit) is fused with the generation: each fixed block of boxes
+    // counts its entries per top digit, then writes them straight to their slots, so that the
+    // entries take one buffer (8 bytes each), not two plus a per-box offset (25 + 25 + 8 MB on a
+    // 1M-triangle bunny); the lower digits are sorted per bucket with a bucket-sized scratch.
+    // The order is radixSortHigh's on the entries in g order (stable: g ascending per cell).
+    // The top digit: the key's highest 8 bits (so that 256 buckets share the entries, and each
+    // bucket's scratch is small), then lowPasses bytes from bit 32 up for the rest.
+    const int top = 32 + std::max(0, keyBits - 8), lowPasses = (top - 32 + 7) / 8;
+    constexpr size_t kBoxBlock = 4096;
+    const size_t boxBlocks = (n + kBoxBlock - 1) / kBoxBlock;
+    // Calls out(entry) for each entry of box g in order; false (nothing called) when the box is
+    // set aside.
+    auto forEachEntry = [&](size_t g, auto&& out) {
+        const Box& b = boxes[g];
+        uint32_t l[3], h[3];
+        uint64_t c = 1;
+        for (int k = 0; k < 3; ++k) {
+            l[k] = grid.cell(b.lo[k], k), h[k] = grid.cell(b.hi[k], k);
+            c *= h[k] - l[k] + 1;
         }
+        if (c > kMaxCellsPerBox) return false;
+        // Bits 29-31: the axes on which this cell holds the box's lower corner.
+        for (uint32_t x = l[0]; x <= h[0]; ++x)
+            for (uint32_t y = l[1]; y <= h[1]; ++y)
+                for (uint32_t z = l[2]; z <= h[2]; ++z) {
+                    const uint64_t low = uint64_t(x == l[0]) | uint64_t(y == l[1]) << 1 | uint64_t(z == l[2]) << 2;
+                    out(grid.key(x, y, z) << 32 | low << 29 | g);
+                }
+        return true;
+    };
+    std::vector<size_t> slots(boxBlocks * 256, 0);
+    std::vector<std::vector<uint32_t>> blockBig(boxBlocks);
+    parallelForEach(0, boxBlocks, [&](size_t blk) {
+        size_t* c = slots.data() + blk * 256;
+        for (size_t g = blk * kBoxBlock, e = std::min(n, g + kBoxBlock); g < e; ++g)
+            if (!forEachEntry(g, [&](uint64_t entry) { ++c[(entry >> top) & 0xff]; }))
+                blockBig[blk].push_back(uint32_t(g));
     });
     std::vector<uint32_t> big;
-    for (size_t g = 0; g < n; ++g) {
-        if (first[g + 1] == 0) big.push_back(uint32_t(g));
-        first[g + 1] += first[g];
-    }
-    const size_t entryCount = first[n];
-    std::unique_ptr<uint64_t[]> entryBuffer(new uint64_t[entryCount]), tmpBuffer(new uint64_t[entryCount]);
-    uint64_t* entries = entryBuffer.get();
-    parallelFor(0, n, 4096, [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t g = r.begin(); g != r.end(); ++g) {
-            if (first[g + 1] == first[g]) continue;
-            const Box& b = boxes[g];
-            uint32_t l[3], h[3];
-            for (int k = 0; k < 3; ++k) l[k] = grid.cell(b.lo[k], k), h[k] = grid.cell(b.hi[k], k);
-            uint64_t* out = entries + first[g];
-            uint64_t* scratch = tmpBuffer.get() + first[g];
-            // Bits 29-31: the axes on which this cell holds the box's lower corner.
-            for (uint32_t x = l[0]; x <= h[0]; ++x)
-                for (uint32_t y = l[1]; y <= h[1]; ++y)
-                    for (uint32_t z = l[2]; z <= h[2]; ++z) {
-                        const uint64_t low = uint64_t(x == l[0]) | uint64_t(y == l[1]) << 1 | uint64_t(z == l[2]) << 2;
-                        *out++ = grid.key(x, y, z) << 32 | low << 29 | g;
-                        *scratch++ = 0;  // first touch of the sort's buffer, in parallel too
-                    }
+    for (const auto& bb : blockBig) big.insert(big.end(), bb.begin(), bb.end());
+    blockBig = {};
+    std::array<size_t, 257> bucket{};
+    size_t entryCount = 0;
+    for (size_t d = 0; d < 256; ++d) {
+        bucket[d] = entryCount;
+        for (size_t blk = 0; blk < boxBlocks; ++blk) {
+            const size_t k = slots[blk * 256 + d];
+            slots[blk * 256 + d] = entryCount;
+            entryCount += k;
         }
+    }
+    bucket[256] = entryCount;
+    // Not value-initialised (every element is written): the parallel loop touches it first.
+    Buffer<uint64_t> entryBuffer(entryCount);
+    uint64_t* const entries = entryBuffer.data();
+    parallelForEach(0, boxBlocks, [&](size_t blk) {
+        size_t* c = slots.data() + blk * 256;
+        for (size_t g = blk * kBoxBlock, e = std::min(n, g + kBoxBlock); g < e; ++g)
+            forEachEntry(g, [&](uint64_t entry) { entries[c[(entry >> top) & 0xff]++] = entry; });
     });
-    first.reset();
-    entries = radixSortHigh(entries, tmpBuffer.get(), entryCount, keyBits);
-    // The start of each cell's entries, then the end: boundaries found per fixed block, joined
-    // in block order.
-    const size_t entryBlocks = (entryCount + kBlock - 1) / kBlock;
-    std::vector<std::vector<size_t>> blockRuns(entryBlocks);
-    parallelForEach(0, entryBlocks, [&](size_t blk) {
-        for (size_t i = blk * kBlock, e = std::min(entryCount, i + kBlock); i < e; ++i)
-            if (i == 0 || entries[i] >> 32 != entries[i - 1] >> 32) blockRuns[blk].push_back(i);
+    slots = {};
+    parallelForEach(0, 256, [&](size_t d) {
+        const size_t m = bucket[d + 1] - bucket[d];
+        if (m < 2 || lowPasses == 0) return;
+        std::unique_ptr<uint64_t[]> scratch(new uint64_t[m]);
+        sortBucket(entries + bucket[d], scratch.get(), m, lowPasses);
+        if (lowPasses % 2 == 1) std::copy(scratch.get(), scratch.get() + m, entries + bucket[d]);
     });
-    std::vector<size_t> runs;
-    for (const auto& br : blockRuns) runs.insert(runs.end(), br.begin(), br.end());
-    runs.push_back(entryCount);
-    blockRuns = {};
+    // The cells: each fixed block of entries takes the cells that start in it (to their end).
+    constexpr size_t kEntryBlock = 2048;
+    const size_t entryBlocks = (entryCount + kEntryBlock - 1) / kEntryBlock;
+    auto cellStart = [&](size_t i) { return i == 0 || i >= entryCount || entries[i] >> 32 != entries[i - 1] >> 32; };
 
     // Each cell's boxes are copied next to each other when the cell is tested (in cache), with
     // the axes on which the cell is the box's lower corner's cell: a pair's owner cell (the
@@ -228,7 +273,7 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     times.buildSeconds = seconds(t0);
 
     t0 = std::chrono::steady_clock::now();
-    parallelFor(0, runs.size() - 1, 64, [&](const tbb::blocked_range<size_t>& r) {
+    parallelFor(0, entryBlocks, 1, [&](const tbb::blocked_range<size_t>& r) {
         // Branch-free inner loop: a pair's test is hard to predict (22-29% pass on the bundled
         // meshes), so every pair is written and the write position advances only on a hit.
         std::array<std::array<uint32_t, 2>, kBatch> hits;
@@ -240,13 +285,19 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
             count = 0;
         };
         std::vector<Entry> packed;
-        for (size_t run = r.begin(); run != r.end(); ++run) {
-            const size_t e = runs[run + 1] - runs[run];
+        size_t begin = r.begin() * kEntryBlock;
+        const size_t stop = std::min(entryCount, r.end() * kEntryBlock);
+        while (begin < stop && !cellStart(begin)) ++begin;
+        while (begin < stop) {
+            size_t end = begin + 1;
+            while (!cellStart(end)) ++end;
+            const size_t e = end - begin, cellFirst = begin;
+            begin = end;
             if (e < 2) continue;
             packed.resize(e);
             for (size_t i = 0; i < e; ++i) {
-                const uint32_t g = uint32_t(entries[runs[run] + i]) & kIndexMask;
-                packed[i] = {boxes[g], g, uint32_t(entries[runs[run] + i] >> 29) & 7};
+                const uint32_t g = uint32_t(entries[cellFirst + i]) & kIndexMask;
+                packed[i] = {boxes[g], g, uint32_t(entries[cellFirst + i] >> 29) & 7};
             }
             for (size_t i = 0; i + 1 < e; ++i) {
                 const Entry& ea = packed[i];

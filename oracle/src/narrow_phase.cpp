@@ -1,5 +1,5 @@
 // The oracle's narrow phase on packed primitive records (see narrow_phase.h): the fast filtered
-// path, which decides most pairs from a float filter and exact integer arithmetic on the records;
+// path, which decides most pairs from a float filter on the planes and exact integer arithmetic;
 // the exact predicates of cullide/predicates.h decide the rest.
 //
 // Compiled with -ffp-contract=off: the filter's error bound (Shewchuk's, as orient3d's) assumes
@@ -18,27 +18,41 @@ Vec3d corner(const Prim& p, int k) {
     return Vec3d(p.p[k][0], p.p[k][1], p.p[k][2]);
 }
 
+// The edges from corner 0 in integers of 2^unit (unit from integerUnit), or false when one is
+// 2^30 or more of them.
+inline bool integerEdges(const Prim& prim, int32_t unit, int64_t u[3], int64_t v[3]) {
+    const double scale = unitScale(unit);
+    constexpr int64_t kLimit = int64_t(1) << 30;
+    for (int k = 0; k < 3; ++k) {
+        const int64_t c0 = toUnit(prim.p[0][k], scale);
+        u[k] = toUnit(prim.p[1][k], scale) - c0;
+        v[k] = toUnit(prim.p[2][k], scale) - c0;
+        if (u[k] >= kLimit || u[k] <= -kLimit || v[k] >= kLimit || v[k] <= -kLimit) return false;
+    }
+    return true;
+}
+
 // Sign of orient3d(a's corners, (x, y, z)) when the float filter is sure of it, else 0. The same
 // arithmetic as orient3d (w = s - p0; det = sum w_k n_k; permanent = sum |w_k| perm_k; the error
 // bound (7 + 56 eps) eps * permanent), with the cofactor expansion along w instead of u, which
 // Shewchuk's analysis covers alike (each term one difference times a 2x2 minor of differences).
-inline int planeSide(const Prim& a, double x, double y, double z) {
+inline int planeSide(const Prim& a, const Plane& pa, double x, double y, double z) {
     const double wx = x - double(a.p[0][0]), wy = y - double(a.p[0][1]), wz = z - double(a.p[0][2]);
-    const double det = wx * a.n[0] + wy * a.n[1] + wz * a.n[2];
-    const double permanent = std::abs(wx) * a.perm[0] + std::abs(wy) * a.perm[1] + std::abs(wz) * a.perm[2];
+    const double det = wx * pa.n[0] + wy * pa.n[1] + wz * pa.n[2];
+    const double permanent = std::abs(wx) * pa.perm[0] + std::abs(wy) * pa.perm[1] + std::abs(wz) * pa.perm[2];
     const double bound = kOrient3dErrBound * permanent;
     return det > bound ? 1 : -det > bound ? -1 : 0;
 }
-inline int planeSide(const Prim& a, const Prim& b, int k) {
-    return planeSide(a, b.p[k][0], b.p[k][1], b.p[k][2]);
-}
 
 // Sign of orient3d(a's corners, b's corner k) when the filter cannot tell: a's integer normal
-// when b's corner is an integer in a's unit (|N| < 2^61, |w| < 2^63: the dot product fits 126
+// (|N| < 2^61) when b's corner is an integer in a's unit (|w| < 2^63: the dot product fits 126
 // bits), then orient3d.
 [[gnu::noinline]] int exactSideSlow(const Prim& a, const Prim& b, int k) {
     if (a.unit != kNoUnit) {
         const double scale = unitScale(a.unit);
+        int64_t u[3], v[3];
+        integerEdges(a, a.unit, u, v);  // within 2^30 units: setUnit checked
+        const int64_t ni[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
         __int128 det = 0;
         bool exact = true;
         for (int c = 0; c < 3; ++c) {
@@ -53,52 +67,46 @@ inline int planeSide(const Prim& a, const Prim& b, int k) {
                 exact = false;
                 break;
             }
-            det += __int128(a.ni[c]) * (q - toUnit(a.p[0][c], scale));  // |N| < 2^61, |w| < 2^63
+            det += __int128(ni[c]) * (q - toUnit(a.p[0][c], scale));  // |N| < 2^61, |w| < 2^63
         }
         if (exact) return det > 0 ? 1 : det < 0 ? -1 : 0;
     }
     return orient3d(corner(a, 0), corner(a, 1), corner(a, 2), corner(b, k));
 }
 
-// Sign of orient3d(a's corners, b's corner k), exactly: the filter, then exactSideSlow.
-inline int exactSide(const Prim& a, const Prim& b, int k) {
-    const int d = planeSide(a, b, k);
+// Sign of orient3d(a's corners, b's corner k), exactly (pa: a's plane): the filter, then
+// exactSideSlow.
+inline int exactSide(const Prim& a, const Plane& pa, const Prim& b, int k) {
+    const int d = planeSide(a, pa, b.p[k][0], b.p[k][1], b.p[k][2]);
     return d != 0 ? d : exactSideSlow(a, b, k);
 }
 
 }  // namespace
 
-void setPlane(Prim& prim) {
+Plane planeOf(const Prim& prim) {
     const double ux = double(prim.p[1][0]) - double(prim.p[0][0]), uy = double(prim.p[1][1]) - double(prim.p[0][1]),
                  uz = double(prim.p[1][2]) - double(prim.p[0][2]);
     const double vx = double(prim.p[2][0]) - double(prim.p[0][0]), vy = double(prim.p[2][1]) - double(prim.p[0][1]),
                  vz = double(prim.p[2][2]) - double(prim.p[0][2]);
     const double m1 = uy * vz, m2 = uz * vy, m3 = uz * vx, m4 = ux * vz, m5 = ux * vy, m6 = uy * vx;
-    prim.n[0] = m1 - m2, prim.n[1] = m3 - m4, prim.n[2] = m5 - m6;
-    prim.perm[0] = std::abs(m1) + std::abs(m2);
-    prim.perm[1] = std::abs(m3) + std::abs(m4);
-    prim.perm[2] = std::abs(m5) + std::abs(m6);
-    prim.unit = kNoUnit;
-    prim.ni[0] = prim.ni[1] = prim.ni[2] = 0;
-    const int32_t unit = integerUnit(&prim.p[0][0], 9);
-    if (unit == kNoUnit) return;
-    const double scale = unitScale(unit);
-    int64_t u[3], v[3];
-    constexpr int64_t kLimit = int64_t(1) << 30;
-    for (int k = 0; k < 3; ++k) {
-        const int64_t c0 = toUnit(prim.p[0][k], scale);
-        u[k] = toUnit(prim.p[1][k], scale) - c0;
-        v[k] = toUnit(prim.p[2][k], scale) - c0;
-        if (u[k] >= kLimit || u[k] <= -kLimit || v[k] >= kLimit || v[k] <= -kLimit) return;
-    }
-    // |components| < 2^61.
-    prim.ni[0] = u[1] * v[2] - u[2] * v[1];
-    prim.ni[1] = u[2] * v[0] - u[0] * v[2];
-    prim.ni[2] = u[0] * v[1] - u[1] * v[0];
-    prim.unit = unit;
+    Plane pl;
+    pl.n[0] = m1 - m2, pl.n[1] = m3 - m4, pl.n[2] = m5 - m6;
+    pl.perm[0] = std::abs(m1) + std::abs(m2);
+    pl.perm[1] = std::abs(m3) + std::abs(m4);
+    pl.perm[2] = std::abs(m5) + std::abs(m6);
+    return pl;
 }
 
-Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
+void setUnit(Prim& prim) {
+    prim.unit = kNoUnit;
+    const int32_t unit = integerUnit(&prim.p[0][0], 9);
+    if (unit == kNoUnit) return;
+    int64_t u[3], v[3];
+    if (integerEdges(prim, unit, u, v)) prim.unit = unit;  // |normal components| < 2^61
+}
+
+Contact primContact(const Prim& a, const Plane& planeA, const Prim& b, bool sameMesh) {
+    // b's plane is computed only past the first rejection.
     // Shared vertex ids, without branches (which neighbour shares what is unpredictable): bit
     // 3i + j when a's corner i is b's corner j. The corners of a kept triangle are distinct ids,
     // so each bit is a different corner on both sides.
@@ -115,7 +123,7 @@ Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
     if (shared == 2) {
         // Not a fold-over unless b's opposite corner is on a's plane (faceContact's first test);
         // then the two opposite corners strictly on one side of the edge (its second).
-        if (exactSide(a, b, 3 - sb[0] - sb[1]) != 0) return Contact::None;
+        if (exactSide(a, planeA, b, 3 - sb[0] - sb[1]) != 0) return Contact::None;
         const Vec3d e0 = corner(a, sa[0]), e1 = corner(a, sa[1]);
         return coplanarOrientation(e0, e1, corner(a, 3 - sa[0] - sa[1]), corner(b, 3 - sb[0] - sb[1])) > 0
             ? Contact::Touching
@@ -126,9 +134,10 @@ Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
         // with the roles swapped). Exact signs: nearly coplanar neighbours (subdivided flat
         // faces, rounded midpoints) are decided here too, not in faceContact.
         const int b1 = (sb[0] + 1) % 3, b2 = (sb[0] + 2) % 3, a1 = (sa[0] + 1) % 3, a2 = (sa[0] + 2) % 3;
-        const int s1 = exactSide(a, b, b1), s2 = exactSide(a, b, b2);
+        const int s1 = exactSide(a, planeA, b, b1), s2 = exactSide(a, planeA, b, b2);
         if (s1 == s2 && s1 != 0) return Contact::None;
-        const int t1 = exactSide(b, a, a1), t2 = exactSide(b, a, a2);
+        const Plane planeB = planeOf(b);
+        const int t1 = exactSide(b, planeB, a, a1), t2 = exactSide(b, planeB, a, a2);
         if (t1 == t2 && t1 != 0) return Contact::None;
         // Coplanar (b's other corners exactly on a's plane, hence all six points): they meet
         // besides the shared vertex v iff their closed wedges at v share more than v, i.e. a
@@ -158,9 +167,10 @@ Contact primContact(const Prim& a, const Prim& b, bool sameMesh) {
         // All of b's corners strictly on one side of a's plane, or all of a's of b's: apart.
         // Exact signs, then Guigue-Devillers on them (triangleContact without recomputing).
         int db[3], da[3];
-        for (int k = 0; k < 3; ++k) db[k] = exactSide(a, b, k);
+        for (int k = 0; k < 3; ++k) db[k] = exactSide(a, planeA, b, k);
         if (db[0] == db[1] && db[1] == db[2] && db[0] != 0) return Contact::None;
-        for (int k = 0; k < 3; ++k) da[k] = exactSide(b, a, k);
+        const Plane planeB = planeOf(b);
+        for (int k = 0; k < 3; ++k) da[k] = exactSide(b, planeB, a, k);
         if (da[0] == da[1] && da[1] == da[2] && da[0] != 0) return Contact::None;
         const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)}, pb{corner(b, 0), corner(b, 1), corner(b, 2)};
         return triangleContactFromSigns(pa, pb, da, db);

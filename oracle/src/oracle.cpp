@@ -38,21 +38,7 @@ constexpr double kMaxCoordinate = 0x1p60;
 
 using detail::Prim;  // what the narrow phase reads of one primitive (narrow_phase.h)
 
-// An array whose trivial elements start unwritten (new T[n] default-initialises; aligned as T
-// asks): the parallel loops that fill it touch its fresh pages first, not a serial memset.
-template <typename T>
-struct Buffer {
-    std::unique_ptr<T[]> data_;
-    size_t size_ = 0;
-    Buffer() = default;
-    explicit Buffer(size_t n) : data_(new T[n]), size_(n) {}
-    T* data() { return data_.get(); }
-    const T* data() const { return data_.get(); }
-    size_t size() const { return size_; }
-    T& operator[](size_t i) { return data_[i]; }
-    const T& operator[](size_t i) const { return data_[i]; }
-    operator std::span<const T>() const { return {data_.get(), size_}; }
-};
+using detail::Buffer;
 
 struct ObjectData {
     Buffer<Prim> prims;  // Embree primitive order = ascending triangle index
@@ -77,6 +63,8 @@ PairClass toClass(Contact c) {
 void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
     Context& ctx = *static_cast<Context*>(user);
     Local& local = ctx.locals.local();
+    const Prim* last = nullptr;  // the grid hands over runs of pairs with the same first primitive
+    detail::Plane plane;
     for (uint32_t k = 0; k < count; ++k) {
         const Candidate& c = pairs[k];
         // The broad phase reports each unordered pair once (the filter is for one reporting
@@ -85,7 +73,8 @@ void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
         ++local.candidates;
         const Prim& a = ctx.objects[c.object0].prims[c.prim0];
         const Prim& b = ctx.objects[c.object1].prims[c.prim1];
-        const Contact contact = detail::primContact(a, b, c.object0 == c.object1);
+        if (&a != last) plane = detail::planeOf(a), last = &a;
+        const Contact contact = detail::primContact(a, plane, b, c.object0 == c.object1);
         if (contact == Contact::None) continue;
         if (c.object0 == c.object1 && a.triangle > b.triangle)
             local.pairs.push_back({c.object0, b.triangle, c.object1, a.triangle, toClass(contact)});
@@ -111,6 +100,16 @@ std::vector<uint32_t> weldMap(std::span<const Vec3f> positions) {
         map[order[k]] =
             (k > 0 && bits(positions[order[k]]) == bits(positions[order[k - 1]])) ? map[order[k - 1]] : order[k];
     return map;
+}
+
+// Bit i of q (10 bits) at bit 3i.
+uint64_t spreadBits(uint64_t q) {
+    q &= 0x3ff;
+    q = (q | q << 16) & 0x30000ff;
+    q = (q | q << 8) & 0x300f00f;
+    q = (q | q << 4) & 0x30c30c3;
+    q = (q | q << 2) & 0x9249249;
+    return q;
 }
 
 // Sorts `kept` (triangle indices, ascending) by the Morton code of the triangles' first corner
@@ -143,7 +142,7 @@ void spatialOrder(std::span<const Vec3f> positions, std::span<const Triangle> tr
                 const float extent = b[3 + k] - b[k];
                 const uint64_t q =
                     extent > 0 ? std::min<uint64_t>(1023, uint64_t(double(p[k] - b[k]) / extent * 1024)) : 0;
-                for (int bit = 0; bit < 10; ++bit) code |= ((q >> bit) & 1) << (3 * bit + k);
+                code |= spreadBits(q) << k;
             }
             keys[i] = code << 32 | kept[i];
             tmp[i] = 0;  // first touch here, in parallel
@@ -151,13 +150,6 @@ void spatialOrder(std::span<const Vec3f> positions, std::span<const Triangle> tr
     });
     const uint64_t* sorted = detail::radixSortHigh(keys.data(), tmp.data(), n, 30);
     for (size_t i = 0; i < n; ++i) kept[i] = uint32_t(sorted[i]);
-}
-
-float roundDown(float x) {
-    return std::nextafter(x, -std::numeric_limits<float>::infinity());
-}
-float roundUp(float x) {
-    return std::nextafter(x, std::numeric_limits<float>::infinity());
 }
 
 // `subset`: per object, which triangles take part (null: all).
@@ -229,14 +221,14 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                     prim.v[k] = vertexId.empty() ? tri[k] : vertexId[tri[k]];
                 }
                 prim.triangle = t;
-                detail::setPlane(prim);
+                detail::setUnit(prim);
                 Box& b = d.boxes[i];
                 for (int k = 0; k < 3; ++k) {
                     const float a = positions[tri[0]][k], bb = positions[tri[1]][k], c = positions[tri[2]][k];
                     // Float corners: the exact box is a float box; one ulp outward keeps boxes
                     // that only touch overlapping, whatever Embree's comparisons.
-                    b.lo[k] = roundDown(std::min({a, bb, c}));
-                    b.hi[k] = roundUp(std::max({a, bb, c}));
+                    b.lo[k] = detail::roundDown(std::min({a, bb, c}));
+                    b.hi[k] = detail::roundUp(std::max({a, bb, c}));
                 }
             }
         });
