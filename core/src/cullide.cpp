@@ -162,8 +162,9 @@ struct Item {
 
 class Culler {
 public:
-    Culler(const Scene& scene, DepthBackend& backend, const CullideOptions& opt)
-        : scene_(scene), backend_(backend), opt_(opt) {}
+    // `consumed`: the scene (the same object) may be emptied once the geometry is uploaded.
+    Culler(const Scene& scene, DepthBackend& backend, const CullideOptions& opt, Scene* consumed = nullptr)
+        : scene_(scene), backend_(backend), opt_(opt), consumed_(consumed) {}
 
     CullideResult run() {
         const auto start = Clock::now();
@@ -235,6 +236,8 @@ private:
                 triangles_.push_back({tri[0] + base, tri[1] + base, tri[2] + base});
             }
         }
+        world = {};
+        if (consumed_) *consumed_ = Scene{};  // scene_ is not read after build()
         backend_.setGeometry(positions_, triangles_);
     }
 
@@ -429,6 +432,7 @@ private:
     }
 
     const Scene& scene_;
+    Scene* consumed_;
     DepthBackend& backend_;
     const CullideOptions& opt_;
     std::vector<Hierarchy> hierarchies_;
@@ -442,13 +446,24 @@ private:
 
 }  // namespace
 
-CullideResult runCullide(const Scene& scene, DepthBackend& backend, const CullideOptions& options) {
+namespace {
+void checkRunnable(DepthBackend& backend, const CullideOptions& options) {
     options.validate();
     if (options.method == CullMethod::Reliable && !backend.supportsConservative())
         throw InputError(
             "option --method",
             "reliable is CPU-only: this backend (" + backend.describe() + ") has no conservative rasterization");
+}
+}  // namespace
+
+CullideResult runCullide(const Scene& scene, DepthBackend& backend, const CullideOptions& options) {
+    checkRunnable(backend, options);
     return Culler(scene, backend, options).run();
+}
+
+CullideResult runCullide(Scene&& scene, DepthBackend& backend, const CullideOptions& options) {
+    checkRunnable(backend, options);
+    return Culler(scene, backend, options, &scene).run();
 }
 
 }  // namespace cullide

@@ -92,6 +92,27 @@ public:
     }
 
     void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override {
+        checkGeometry(positions, triangles);
+        // New vectors, not assign(): a smaller geometry gives its memory back.
+        ownedPositions_ = std::vector<Vec3f>(positions.begin(), positions.end());
+        ownedTriangles_ = std::vector<Triangle>(triangles.begin(), triangles.end());
+        positions_ = ownedPositions_;
+        triangles_ = ownedTriangles_;
+        borrowed_ = false;
+        windowValid_ = false;
+    }
+
+    void borrowGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override {
+        checkGeometry(positions, triangles);
+        std::vector<Vec3f>().swap(ownedPositions_);
+        std::vector<Triangle>().swap(ownedTriangles_);
+        positions_ = positions;
+        triangles_ = triangles;
+        borrowed_ = true;
+        windowValid_ = false;
+    }
+
+    static void checkGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) {
         const size_t n = positions.size();
         for (size_t t = 0; t < triangles.size(); ++t)
             for (uint32_t v : triangles[t])
@@ -101,12 +122,14 @@ public:
                                          " of " + std::to_string(n));
         if (triangles.size() >= size_t(UINT32_MAX))
             throw InputError("geometry", "too many triangles for 32-bit indices");
-        positions_.assign(positions.begin(), positions.end());
-        triangles_.assign(triangles.begin(), triangles.end());
-        windowValid_ = false;
     }
 
     void releaseScratch() override {
+        if (borrowed_) {  // the lender may free it now
+            positions_ = {};
+            triangles_ = {};
+            borrowed_ = false;
+        }
         std::vector<WinVertex>().swap(window_);
         std::vector<SnapVertex>().swap(snapped_);
         windowValid_ = false;
@@ -265,8 +288,11 @@ private:
 
     CpuBackendOptions options_;
     tbb::task_arena arena_;
-    std::vector<Vec3f> positions_;
-    std::vector<Triangle> triangles_;
+    std::vector<Vec3f> ownedPositions_;  // setGeometry's copy
+    std::vector<Triangle> ownedTriangles_;
+    std::span<const Vec3f> positions_;  // the copy, or borrowGeometry's arrays
+    std::span<const Triangle> triangles_;
+    bool borrowed_ = false;
     OrthoView view_;
     bool haveView_ = false;
     SetupParams params_;

@@ -110,10 +110,12 @@ void relayoutSpilled(RecordSet<Rec>& set) {
 
 // Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, emit)`
 // calls emit(record) for each record of triangle t and returns its TriFlags (`scratch`, a Scratch
-// per task). Records go straight to their chunk's slot (records.h); then they are binned to
-// tiles.
-template <typename Scratch, typename Rec, typename SetupOne>
-void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const SetupOne& setupOne) {
+// per task). Records go straight to their chunk's slot (records.h), sized by `countOne(t)`, a
+// cheap guess of triangle t's records: a guess too high leaves unused slots, one too low makes
+// the chunk spill; the records are the same either way. Then they are binned to tiles.
+template <typename Scratch, typename Rec, typename CountOne, typename SetupOne>
+void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const CountOne& countOne,
+                  const SetupOne& setupOne) {
     if (set.flags.size() < triangles) {
         set.flags.resize(triangles);
         set.begin.resize(triangles);
@@ -122,8 +124,14 @@ void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, c
     const std::vector<std::array<uint32_t, 2>>& chunks = set.chunks;
     set.slotStart.resize(chunks.size() + 1);
     set.slotStart[0] = 0;
-    for (size_t ci = 0; ci < chunks.size(); ++ci)
-        set.slotStart[ci + 1] = set.slotStart[ci] + (chunks[ci][1] - chunks[ci][0]);
+    parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t ci = r.begin(); ci != r.end(); ++ci) {
+            size_t n = 0;
+            for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) n += countOne(t);
+            set.slotStart[ci + 1] = n;
+        }
+    });
+    for (size_t ci = 0; ci < chunks.size(); ++ci) set.slotStart[ci + 1] += set.slotStart[ci];
     CULLIDE_CHECK(set.slotStart.back() < size_t(UINT32_MAX), "too many triangle records for 32-bit indices");
     resizeForOverwrite(set.records, set.slotStart.back());
     resizeForOverwrite(set.tiles, set.slotStart.back());
@@ -182,7 +190,17 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     drawnChunks(list, Command::Op::Draw, out);
     SetupParams params = in.params;
     params.dropEmpty = true;
-    buildRecords<SubTriangles>(out, in.triangles.size(), in.grid, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
+    // The guess: what setupUnclipped gives a triangle whose vertices need no clipping (0 or 1
+    // record), 1 for the others (clipped ones with more spill).
+    auto countOne = [&](uint32_t t) -> uint32_t {
+        const Triangle& tri = in.triangles[t];
+        const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
+        if (!(s0.inside && s1.inside && s2.inside)) return 1;
+        if (trivialReject(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]], params)) return 0;
+        const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
+        return snappedHasArea(sx, sy) && boxHoldsCentre(sx, sy, params) ? 1 : 0;
+    };
+    buildRecords<SubTriangles>(out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
         SnappedTri* sub = scratch.sub;
         const Triangle& tri = in.triangles[t];
         int n = 0;
@@ -210,7 +228,8 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
 void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const WindowError& err,
                             RecordSet<ConsRec>& out) {
     drawnChunks(list, Command::Op::DrawConservative, out);
-    buildRecords<NoScratch>(out, in.triangles.size(), in.grid, [&](uint32_t t, NoScratch&, auto&& emit) -> uint8_t {
+    auto countOne = [](uint32_t) -> uint32_t { return 1; };
+    buildRecords<NoScratch>(out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, NoScratch&, auto&& emit) -> uint8_t {
         const Triangle& tri = in.triangles[t];
         ConsRec rec;
         if (!setupConservative(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]], in.params, err, rec.t))

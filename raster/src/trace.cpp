@@ -566,12 +566,12 @@ IntervalOptions withThreads(IntervalOptions o, int threads) {
 }
 }  // namespace
 
-TraceRecorder::TraceRecorder(DepthBackend& reference, TraceWriter& writer, const TraceRules& rules, int threads)
+TraceRecorder::TraceRecorder(CpuBackend& reference, TraceWriter& writer, const TraceRules& rules, int threads)
     : reference_(reference), writer_(writer), intervals_(withThreads(rules.intervalOptions(), threads)) {}
 
 void TraceRecorder::setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) {
     endFrame();  // the previous frame's lists
-    reference_.setGeometry(positions, triangles);
+    reference_.borrowGeometry(positions, triangles);
     writer_.beginFrame(frame_, positions, triangles);
 }
 
@@ -588,6 +588,7 @@ std::vector<uint64_t> TraceRecorder::execute(const CommandList& list) {
 }
 
 void TraceRecorder::endFrame() {
+    reference_.releaseScratch();  // and forgets the borrowed geometry
     if (pending_.empty()) return;
     // The geometry comes back from the writer's scratch file (the caller's copy is gone by now).
     {

@@ -80,7 +80,6 @@ int fanPolygon(const WinVertex* poly, int n, const int64_t* sx, const int64_t* s
                const WinVertex& v1, const WinVertex& v2, const SetupParams& params, SnappedTri* out, int& count) {
     const int S = params.subpixelBits;
     const double unit = std::ldexp(1.0, -S);
-    const int64_t half = int64_t(1) << (S - 1);
     int nonZero = 0;
     DepthPlane plane;  // of the whole (unclipped, unsnapped) triangle, computed on first use
     int havePlane = -1;
@@ -90,14 +89,8 @@ int fanPolygon(const WinVertex* poly, int n, const int64_t* sx, const int64_t* s
         if (area2 == 0) continue;  // zero area after snapping: no fragment (counted by the caller)
         ++nonZero;
         if (params.dropEmpty) {
-            // No centre i*2^S + half within [min, max] in x or in y, or none inside the viewport.
-            const int64_t minx = std::min({sx[i0], sx[i1], sx[i2]}), maxx = std::max({sx[i0], sx[i1], sx[i2]});
-            const int64_t miny = std::min({sy[i0], sy[i1], sy[i2]}), maxy = std::max({sy[i0], sy[i1], sy[i2]});
-            const int64_t lox = std::max<int64_t>(-((half - minx) >> S), 0);
-            const int64_t hix = std::min<int64_t>((maxx - half) >> S, params.width - 1);
-            const int64_t loy = std::max<int64_t>(-((half - miny) >> S), 0);
-            const int64_t hiy = std::min<int64_t>((maxy - half) >> S, params.height - 1);
-            if (lox > hix || loy > hiy) continue;
+            const int64_t tx[3] = {sx[i0], sx[i1], sx[i2]}, ty[3] = {sy[i0], sy[i1], sy[i2]};
+            if (!boxHoldsCentre(tx, ty, params)) continue;
         }
         if (havePlane < 0) havePlane = planeFrom(v0, v1, v2, plane) ? 1 : 0;
         if (area2 < 0) std::swap(i1, i2);  // both windings rasterize
@@ -134,6 +127,19 @@ bool trivialReject(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2
 bool insideClipVolume(const WinVertex& v, const SetupParams& params) {
     const double G = guardBandPixels(params.subpixelBits);
     return v.z >= 0 && v.z <= 1 && v.x >= -G && v.x <= G && v.y >= -G && v.y <= G;
+}
+
+bool boxHoldsCentre(const int64_t sx[3], const int64_t sy[3], const SetupParams& params) {
+    // A centre i*2^S + half within [min, max] in x and in y, inside the viewport.
+    const int S = params.subpixelBits;
+    const int64_t half = int64_t(1) << (S - 1);
+    const int64_t minx = std::min({sx[0], sx[1], sx[2]}), maxx = std::max({sx[0], sx[1], sx[2]});
+    const int64_t miny = std::min({sy[0], sy[1], sy[2]}), maxy = std::max({sy[0], sy[1], sy[2]});
+    const int64_t lox = std::max<int64_t>(-((half - minx) >> S), 0);
+    const int64_t hix = std::min<int64_t>((maxx - half) >> S, params.width - 1);
+    const int64_t loy = std::max<int64_t>(-((half - miny) >> S), 0);
+    const int64_t hiy = std::min<int64_t>((maxy - half) >> S, params.height - 1);
+    return lox <= hix && loy <= hiy;
 }
 
 uint8_t setupUnclipped(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],

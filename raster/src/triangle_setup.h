@@ -55,6 +55,12 @@ uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex&
 // insideClipVolume, setupUnclipped(v, snapped x, snapped y); else the clipping path.
 bool trivialReject(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params);
 bool insideClipVolume(const WinVertex& v, const SetupParams& params);
+// Whether the snapped triangle has non-zero area (orientation), and whether its bounding box
+// holds a pixel centre of the viewport: the tests by which setup drops a sub-triangle.
+inline bool snappedHasArea(const int64_t sx[3], const int64_t sy[3]) {
+    return (sx[1] - sx[0]) * (sy[2] - sy[0]) - (sx[2] - sx[0]) * (sy[1] - sy[0]) != 0;
+}
+bool boxHoldsCentre(const int64_t sx[3], const int64_t sy[3], const SetupParams& params);
 uint8_t setupUnclipped(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],
                        const int64_t sy[3], const SetupParams& params, SnappedTri out[kMaxSubTriangles], int& count);
 

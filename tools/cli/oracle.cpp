@@ -12,9 +12,6 @@
 #include "cullide/study/measures.h"
 
 #include <nlohmann/json.hpp>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -38,13 +35,6 @@ struct OracleCommandOptions {
 };
 
 int runOracle(const OracleCommandOptions& o) {
-#if defined(__GLIBC__)
-    // A fixed mmap threshold: glibc otherwise raises it to the size of each large block freed
-    // (up to 32 MB), so that the oracle's later large buffers come from the heap, where freed
-    // ones stay resident: 164 -> 140 MB peak on a 1M-triangle bunny. Every block over 128 KiB
-    // is then mapped on its own and returned on free.
-    mallopt(M_MMAP_THRESHOLD, 128 * 1024);
-#endif
     std::optional<tbb::global_control> limit;
     if (o.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
     const Animation animation = loadScene(o.scene);

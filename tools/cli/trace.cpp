@@ -60,7 +60,6 @@ Recording recordTrace(const Animation& animation, size_t first, size_t last, con
     for (size_t f = first; f < last; ++f) {
         recorder.setFrame(uint32_t(f));
         out.pcs.push_back(runCullide(animation.sceneAt(f), recorder, options).pcs);
-        cpu->releaseScratch();  // the intervals of the frame's lists come next (endFrame)
         recorder.endFrame();
     }
     out.bytes = recorder.finish();

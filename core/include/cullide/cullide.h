@@ -116,6 +116,9 @@ struct CullideResult {
 // InputError("option --method", ...) for the reliable method on a backend without conservative
 // rasterization.
 CullideResult runCullide(const Scene& scene, DepthBackend& backend, const CullideOptions& options);
+// The same for a scene the caller gives up (a frame made by Animation::sceneAt): it is emptied as
+// soon as the geometry is uploaded, so that it is not in memory beside the run's own copy.
+CullideResult runCullide(Scene&& scene, DepthBackend& backend, const CullideOptions& options);
 
 // A run of triangles [first, first + count) in a geometry's triangle list.
 struct TriangleRange {

@@ -26,6 +26,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace cullide::raster {
@@ -80,6 +81,10 @@ public:
     // coordinates), keeping geometry, view and buffers; the next execute() allocates it again.
     // For a caller that runs something else large between lists (trace recording).
     virtual void releaseScratch() = 0;
+    // setGeometry without the copy: the caller keeps both arrays alive and unchanged until the
+    // next setGeometry, borrowGeometry or releaseScratch (which forgets them). For a caller that
+    // holds the geometry anyway (trace recording: the pipeline's arrays, during its run).
+    virtual void borrowGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) = 0;
 };
 
 // Creates a CPU backend. Throws InputError("cpu backend options", ...) on options out of range.

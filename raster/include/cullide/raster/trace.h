@@ -13,6 +13,7 @@
 #pragma once
 
 #include "cullide/depth_backend.h"
+#include "cullide/raster/cpu_backend.h"
 #include "cullide/raster/rules.h"
 #include "cullide/raster/validate.h"
 
@@ -157,7 +158,9 @@ private:
 class TraceRecorder : public DepthBackend {
 public:
     // `threads`: the interval evaluator's workers (IntervalOptions::threads; 0: oneTBB's default).
-    TraceRecorder(DepthBackend& reference, TraceWriter& writer, const TraceRules& rules, int threads = 0);
+    // The reference borrows each frame's geometry (CpuBackend::borrowGeometry) and its scratch is
+    // released at endFrame: the caller's arrays must live until then, as runCullide's do.
+    TraceRecorder(CpuBackend& reference, TraceWriter& writer, const TraceRules& rules, int threads = 0);
     std::string describe() const override { return "trace recorder: " + reference_.describe(); }
     void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override;
     void setView(const OrthoView& view) override;
@@ -184,7 +187,7 @@ private:
         CommandList commands;
         std::vector<uint64_t> results;
     };
-    DepthBackend& reference_;
+    CpuBackend& reference_;
     TraceWriter& writer_;
     QueryIntervals intervals_;
     OrthoView view_;
