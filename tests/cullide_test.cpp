@@ -166,6 +166,24 @@ TEST(Cullide, InterpenetratingBoxesKeepCrossingTriangles) {
         }
 }
 
+// Trap: runCullide(Scene&&) (trace recording gives up each frame's scene to save memory)
+// emptying the scene before its geometry is read, or answering differently from the const& form.
+TEST(Cullide, ConsumedSceneGivesTheSamePcsAndIsEmptied) {
+    const Scene s = sceneOf({{box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), rotation(0.3, 0.5, 0.7)},
+                             {box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), rotation(0.9, 0.2, 0.4, Vec3f(0.5, 0.4, 0.3))}});
+    const CullideResult expected = prune(s, CullMethod::Modified, 1);
+    auto backend = raster::makeCpuBackend();
+    CullideOptions o;
+    o.width = o.height = 256;
+    o.hierarchy.leafSize = 1;
+    o.hierarchy.branching = 2;
+    Scene consumed = s;
+    const CullideResult got = runCullide(std::move(consumed), *backend, o);
+    EXPECT_EQ(got.pcs, expected.pcs);
+    EXPECT_FALSE(expected.pcs.empty());
+    EXPECT_TRUE(consumed.objects.empty());  // NOLINT(bugprone-use-after-move): emptied on purpose
+}
+
 // A ribbon that passes through itself: one object, so only the modified method can see it. The
 // original method is inter-object only and prunes a lone object at once (its documented limit).
 TEST(Cullide, SelfCrossingRibbonKeptByModified) {

@@ -1058,6 +1058,24 @@ TEST(CpuBackend, ReleaseScratchKeepsResults) {
     }
 }
 
+// Trap: borrowGeometry (trace recording lends the pipeline's arrays) answering differently from
+// setGeometry, or still reading the lender's arrays after releaseScratch, when they may be gone:
+// a draw then finds no geometry and is refused.
+TEST(CpuBackend, BorrowedGeometryIsForgottenOnRelease) {
+    const RandomScene s = randomScene(78, 80, 60, 400, 150);
+    const OrthoView view = windowView(80, 60, DepthFormat::unorm(24));
+    auto copied = backendFor(s.geo, view, {});
+    auto lender = raster::makeCpuBackend();
+    lender->borrowGeometry(s.geo.positions, s.geo.triangles);
+    lender->setView(view);
+    EXPECT_EQ(copied->execute(s.list), lender->execute(s.list));
+    EXPECT_EQ(copied->readDepth().values, lender->readDepth().values);
+    lender->releaseScratch();
+    CommandList draw;
+    draw.draw(0, 1);
+    EXPECT_THROW(lender->execute(draw), InputError);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Resolutions and formats
 
