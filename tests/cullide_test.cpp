@@ -3,6 +3,7 @@
 
 #include "cullide/error.h"
 #include "cullide/options.h"
+#include "cullide/oracle/oracle.h"
 #include "cullide/raster/cpu_backend.h"
 
 #include "test_util.h"
@@ -12,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <map>
@@ -21,6 +23,12 @@ using namespace cullide;
 using cullide::test::box;
 using cullide::test::rotation;
 using cullide::test::sceneOf;
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define CULLIDE_SANITIZED 1
+#else
+#define CULLIDE_SANITIZED 0
+#endif
 
 namespace {
 
@@ -134,6 +142,56 @@ bool contains(const CullideResult& r, const std::set<PcsTriangle>& want) {
     return std::includes(have.begin(), have.end(), want.begin(), want.end());
 }
 
+// Two unit cubes that touch and do not overlap: A = [0,1]^3 and B = A moved by `offset`
+// ((1,0,0): face to face, (1,1,0): along an edge, (1,1,1): at one corner). `rotated` turns both
+// about z by atan(3/4) (cos 0.8, sin 0.6), in float on the positions: B's corners on the shared
+// face are computed from the same inputs as A's, so the contact stays exact (the shared face
+// stays vertical, so the shared corners are exactly coplanar, and both cubes split it along the
+// same diagonal).
+struct TouchingCase {
+    const char* id;  // the test instance's name
+    Vec3f offset;
+    bool rotated;
+    size_t pairs;  // touching pairs between the cubes (the oracle; measured)
+    size_t colliding;  // triangles in some pair
+};
+const std::array<TouchingCase, 4> kTouching{{{"FaceFace", Vec3f(1, 0, 0), false, 62, 20},
+                                             {"FaceFaceRotated", Vec3f(1, 0, 0), true, 62, 20},
+                                             {"EdgeEdge", Vec3f(1, 1, 0), false, 44, 16},
+                                             {"CornerCorner", Vec3f(1, 1, 1), false, 36, 12}}};
+
+Scene touchingCubes(const TouchingCase& c) {
+    auto cube = [&](const Vec3f& lo) {
+        Mesh m = box(lo, lo + Vec3f(1, 1, 1));
+        if (c.rotated)
+            for (Vec3f& p : m.positions) p = Vec3f(0.8f * p.x() - 0.6f * p.y(), 0.6f * p.x() + 0.8f * p.y(), p.z());
+        return m;
+    };
+    return sceneOf({{cube(Vec3f(0, 0, 0)), Transform::Identity()}, {cube(c.offset), Transform::Identity()}});
+}
+
+struct TouchOutcome {
+    size_t pcs = 0, pairs = 0, lost = 0;  // PCS size, the oracle's pairs, pairs with a triangle pruned
+};
+
+TouchOutcome pruneTouching(const Scene& s, CullMethod method, int resolution, DepthFormat depth, uint32_t leafSize,
+                           std::vector<Vec3d> directions = axisDirections()) {
+    auto backend = raster::makeCpuBackend();
+    CullideOptions o;
+    o.method = method;
+    o.width = o.height = resolution;
+    o.depth = depth;
+    o.hierarchy.leafSize = leafSize;
+    o.directions = std::move(directions);
+    const CullideResult r = runCullide(s, *backend, o);
+    const std::set<PcsTriangle> kept(r.pcs.begin(), r.pcs.end());
+    const oracle::Truth truth = oracle::findIntersections(s);
+    TouchOutcome out{kept.size(), truth.pairs.size(), 0};
+    for (const oracle::IntersectingPair& p : truth.pairs)
+        out.lost += !kept.count({p.objectA, p.triangleA}) || !kept.count({p.objectB, p.triangleB});
+    return out;
+}
+
 }  // namespace
 
 // Two separated boxes in a generic orientation, leaves of one triangle (always self-visible
@@ -244,6 +302,115 @@ TEST(Cullide, AxisAlignedBoxesLoseCrossingEdgeOn) {
     o.directions = {Vec3d(1, 2, 3).normalized(), Vec3d(-3, 1, 2).normalized(), Vec3d(2, -3, 1).normalized()};
     const CullideResult r = runCullide(s, *backend, o);
     EXPECT_TRUE(contains(r, truth)) << "PCS " << r.pcs.size() << ", crossing " << truth.size();
+}
+
+// The touching cubes, one test instance per case (face-face, face-face rotated, edge-edge,
+// corner-corner), so that each stays short.
+class CullideTouching : public ::testing::TestWithParam<TouchingCase> {};
+
+// Trap: "the original method keeps contacts" read as a promise about the image. Two cubes that
+// only touch: in a view along the contact plane (+-y or +-z for face-face, +-z for the turned
+// pair, every axis for edge and corner) their projections share only a segment or a point. A
+// pixel centre on that boundary is owned by exactly one of the two (the fill rule,
+// raster/include/cullide/raster/rules.h rule 5), any other centre by at most one, so no centre
+// is shared, GEQUAL has nothing to pass on, and both objects are pruned whole at the object
+// level: every pair lost, with any leaf size, whether the contact falls between centres (500)
+// or on them (501; CullideTouchingView).
+TEST_P(CullideTouching, OriginalLosesEveryTouchingPair) {
+    const TouchingCase& c = GetParam();
+    const Scene s = touchingCubes(c);
+    for (int res : {500, 501})
+        for (uint32_t leaf : {1u, 16u}) {
+            const TouchOutcome r = pruneTouching(s, CullMethod::Original, res, DepthFormat::unorm(24), leaf);
+            EXPECT_EQ(r.pairs, c.pairs);
+            EXPECT_EQ(r.pcs, 0u) << res << " leaf " << leaf;
+            EXPECT_EQ(r.lost, c.pairs) << res << " leaf " << leaf;
+        }
+}
+
+// Trap: the modified method looks "safe" on touching cubes with the default leaves: a 12-triangle
+// cube is one leaf of 16, a closed surface that hides its own back faces in every direction, so
+// both cubes stay whole in the PCS (24) whether or not they touch. With one triangle per leaf
+// nothing hides itself and every touching pair is lost: equal depth fails GREATER, and where the
+// projections only abut no centre is shared at all.
+TEST_P(CullideTouching, ModifiedKeepsClosedLeavesNotContacts) {
+    const TouchingCase& c = GetParam();
+    const Scene s = touchingCubes(c);
+    const TouchOutcome whole = pruneTouching(s, CullMethod::Modified, 500, DepthFormat::unorm(24), 16);
+    EXPECT_EQ(whole.pairs, c.pairs);
+    EXPECT_EQ(whole.pcs, 24u);
+    EXPECT_EQ(whole.lost, 0u);
+    const TouchOutcome single = pruneTouching(s, CullMethod::Modified, 500, DepthFormat::unorm(24), 1);
+    EXPECT_EQ(single.pcs, 0u);
+    EXPECT_EQ(single.lost, c.pairs);
+}
+
+// Trap: a coarse image or a coarse depth format losing a contact in the reliable method. Its
+// coverage is conservative (a boundary centre counts for both cubes) and its depths are
+// intervals, so every touching pair is kept at 16x16 with D8 as at 2048x2048 with float depth;
+// with one triangle per leaf the PCS is exactly the touching triangles (nothing else kept). At
+// 2048 one view along the contact plane (+z, where the original loses every pair, checked here
+// too) with the default leaves (the cubes are two units tested against each other) keeps the test
+// short; sanitizer builds use 256.
+TEST_P(CullideTouching, ReliableKeepsEveryTouchingPairCoarseAndFine) {
+    const TouchingCase& c = GetParam();
+    const Scene s = touchingCubes(c);
+    const TouchOutcome coarse = pruneTouching(s, CullMethod::Reliable, 16, DepthFormat::unorm(8), 1);
+    EXPECT_EQ(coarse.pairs, c.pairs);
+    EXPECT_EQ(coarse.lost, 0u);
+    EXPECT_EQ(coarse.pcs, c.colliding);
+    const int fine = CULLIDE_SANITIZED ? 256 : 2048;
+    const TouchOutcome f = pruneTouching(s, CullMethod::Reliable, fine, DepthFormat::float32(), 16, {Vec3d(0, 0, 1)});
+    EXPECT_EQ(f.lost, 0u) << fine;
+    EXPECT_EQ(f.pcs, 24u) << fine;
+    EXPECT_EQ(pruneTouching(s, CullMethod::Original, fine, DepthFormat::float32(), 16, {Vec3d(0, 0, 1)}).lost, c.pairs)
+        << fine << ": the original loses them all in this view";
+}
+
+INSTANTIATE_TEST_SUITE_P(Cubes, CullideTouching, ::testing::ValuesIn(kTouching),
+                         [](const ::testing::TestParamInfo<TouchingCase>& i) { return std::string(i.param.id); });
+
+// Trap: calling the face-face loss "sampling" (the contact between pixel columns) when the fill
+// rule alone suffices. In the +y view that prunes the face-face cubes (fitted to both, x in [0, 2]
+// filling the width) the contact x = 1 lies between two columns of centres at 500 pixels (window
+// 250.0) and on a column of centres at 501 (250.5), which only one of the cubes owns; the
+// original loses every pair at both (CullideTouching.OriginalLosesEveryTouchingPair).
+TEST(CullideTouchingView, FaceContactBetweenCentresAt500OnCentresAt501) {
+    const Scene s = touchingCubes(kTouching[0]);
+    const FlatScene flat = flatten(s);
+    const TriangleRange all{0, uint32_t(flat.mesh.triangles.size())};
+    for (int res : {500, 501}) {
+        const OrthoView v = fitView(flat.mesh.positions, flat.mesh.triangles, {&all, 1}, Vec3d(0, 1, 0), res, res,
+                                    DepthFormat::unorm(24));
+        const Vec3d w0 = v.toWindow(Vec3f(1, 0, 0)), w1 = v.toWindow(Vec3f(1, 0, 1));
+        const double across = std::abs(w0.x() - w1.x()) < 1e-9 ? w0.x() : w0.y();  // constant along the contact
+        EXPECT_NEAR(across - std::floor(across), res == 500 ? 0.0 : 0.5, 1e-9) << res;
+    }
+}
+
+// Trap: reading "the original keeps both cubes" as "it sees the contact". The face-face cubes
+// turned about (1, 2, 3) by 40 degrees (in float, B's shared corners from the same inputs as
+// A's): no axis lies in the contact plane, so from every axis one cube is partly behind the other
+// and, with the default leaves, both stay whole (24). With one triangle per leaf only the four
+// triangles of the shared face stay (equal depth over an area passes GEQUAL); the contacts along
+// the cubes' edges project to segments in every view and are lost.
+TEST(CullideTouchingGeneric, OriginalKeepsTheSharedFaceOnly) {
+    const Eigen::Matrix3f r =
+        Eigen::AngleAxisf(40 * std::numbers::pi_v<float> / 180, Vec3f(1, 2, 3).normalized()).toRotationMatrix();
+    auto cube = [&](const Vec3f& lo) {
+        Mesh m = box(lo, lo + Vec3f(1, 1, 1));
+        for (Vec3f& p : m.positions) p = r * p;
+        return m;
+    };
+    const Scene s =
+        sceneOf({{cube(Vec3f(0, 0, 0)), Transform::Identity()}, {cube(Vec3f(1, 0, 0)), Transform::Identity()}});
+    const TouchOutcome whole = pruneTouching(s, CullMethod::Original, 500, DepthFormat::unorm(24), 16);
+    EXPECT_EQ(whole.pairs, 62u);
+    EXPECT_EQ(whole.pcs, 24u);
+    EXPECT_EQ(whole.lost, 0u);
+    const TouchOutcome single = pruneTouching(s, CullMethod::Original, 500, DepthFormat::unorm(24), 1);
+    EXPECT_EQ(single.pcs, 4u);
+    EXPECT_EQ(single.lost, 58u);
 }
 
 // Same scene and options: the same PCS and the same per-pass counts, bit for bit, for 1 and 2

@@ -336,7 +336,8 @@ int runInfo(const InfoOptions& o) {
 
 void addCullideOptions(CLI::App* sub, OptionText& o) {
     sub->add_option("--method", o.method,
-                    "original (Cullide, contacts kept) | modified (self-intersections kept) | reliable (no "
+                    "original (Cullide: between objects; contacts only where both cover a pixel centre) | modified "
+                    "(self-intersections kept, contacts lost) | reliable (no "
                     "intersecting triangle is ever pruned; CPU backend only; docs/reliable.md)")
         ->capture_default_str();
     sub->add_option("--resolution", o.resolution,

@@ -64,9 +64,13 @@ CullMethod parseCullMethod(const std::string& text);  // "original" | "modified"
 
 // Whether `method` promises never to prune an intersecting pair of triangles: a crossing pair
 // (one passes through the other) or a touching one, of one object or of two. Reliable keeps every
-// pair; modified every crossing pair (a contact at equal depth may be lost); original every pair
-// between two objects (it never tests an object against itself). A false prune of a promised
-// pair is a bug, any other one a limit of the method (`prune --check` exits 1 on the former).
+// pair, in the image too; modified every crossing pair (a contact at equal depth may be lost);
+// original every pair between two objects (it never tests an object against itself). For
+// modified and original that is the continuous promise (exact depths, an infinitely fine image):
+// in the image they also lose promised pairs to the fill rule, sampling, depth rounding and
+// edge-on triangles (docs/cullide.md; e.g. the original on cubes that only touch). A false prune
+// of a promised pair is such a loss or a bug, any other one a limit of the method itself
+// (`prune --check` exits 1 on the former).
 bool promisesToKeep(CullMethod method, bool crossing, bool sameObject);
 
 // Directions: the six axis directions +x, -x, +y, -y, +z, -z (the default).
