@@ -106,13 +106,15 @@ void Progress::draw() {
     last_ = Clock::now();
     const double elapsed = std::chrono::duration<double>(last_ - start_).count();
     const double fraction = total_ ? std::min(1.0, double(done_) / double(total_)) : 1.0;
-    constexpr int kBar = 30;
-    const int filled = int(kBar * fraction);
+    // 30 characters of bar, fewer on a narrow terminal so that the counts and times still fit.
+    const size_t columns = terminalColumns();
+    const int barWidth = columns ? std::clamp(int(columns) - 50, 10, 30) : 30;
+    const int filled = int(barWidth * fraction);
     // Built stepwise: GCC 12 warns (-Wrestrict) on chains of string + literal.
     std::string line = label_;
     line += " [";
     line.append(size_t(filled), '#');
-    line.append(size_t(kBar - filled), '.');
+    line.append(size_t(barWidth - filled), '.');
     line += "] ";
     line += std::to_string(done_);
     line += '/';
@@ -132,7 +134,7 @@ void Progress::draw() {
         line += "; ";
         line += detail_;
     }
-    if (const size_t columns = terminalColumns(); columns > 1 && line.size() > columns - 1) line.resize(columns - 1);
+    if (columns > 1 && line.size() > columns - 1) line.resize(columns - 1);
     std::string text = "\r";
     text += line;
     if (width_ > line.size()) text.append(width_ - line.size(), ' ');  // what is left of a longer line
