@@ -412,7 +412,7 @@ private:
     }
 
     // The statistics of one reducePCS call from `pcs` to `kept` (triangles rendered: those of the
-    // list's `drawOp` commands), appended to `passes` and reported to onPass. Returns `kept`.
+    // list's `drawOp` commands), appended to `passes` and reported to onPass and onPassStats. Returns `kept`.
     std::vector<Item> finishCall(const std::vector<Item>& pcs, std::vector<Item> kept, uint32_t level, uint32_t d,
                                  Command::Op drawOp, Clock::time_point start, std::vector<PassStats>& passes) {
         PassStats st;
@@ -428,6 +428,7 @@ private:
         st.seconds = secondsSince(start);
         passes.push_back(st);
         if (opt_.onPass) opt_.onPass(st, expand(kept));
+        if (opt_.onPassStats) opt_.onPassStats(st);
         return kept;
     }
 

@@ -9,6 +9,7 @@
 #include "cullide/error.h"
 #include "cullide/options.h"
 #include "cullide/scene.h"
+#include "cullide/study/progress.h"
 
 #include <CLI/CLI.hpp>
 
@@ -39,6 +40,11 @@ inline FrameRange selectFrames(const Animation& animation, long frame, const std
 // refuses an option that does not apply (--seed without --hierarchy random).
 void addCullideOptions(CLI::App* sub, OptionText& text);
 void checkCullideOptions(const CLI::App* sub, const OptionText& text);
+
+// --progress auto|always|never on a subcommand that can run long: the progress bar on stderr
+// (cullide/study/progress.h), with the same help everywhere. A bad value is an
+// InputError("option --progress") while parsing (exit status 2).
+void addProgressOption(CLI::App* sub, study::ProgressMode& mode);
 
 void addInfoCommand(CLI::App& app, Action& action);
 void addMakeSceneCommand(CLI::App& app, Action& action);

@@ -10,6 +10,7 @@
 #include "cullide/provenance.h"
 #include "cullide/scene_io.h"
 #include "cullide/study/measures.h"
+#include "cullide/study/progress.h"
 
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
@@ -32,6 +33,7 @@ struct OracleCommandOptions {
     int threads = 0;
     bool weld = false;
     std::string broadPhase = "grid";
+    study::ProgressMode progress = study::ProgressMode::Auto;
 };
 
 int runOracle(const OracleCommandOptions& o) {
@@ -44,13 +46,25 @@ int runOracle(const OracleCommandOptions& o) {
     options.broadPhase = oracle::parseBroadPhase(o.broadPhase);
 
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+    // Per frame: the oracle has no hook within a frame (and its results must not depend on one).
+    study::Progress bar("oracle", last - first, "frames", o.progress);
     for (size_t f = first; f < last; ++f) {
+        if (bar.shown()) {
+            std::string detail = "frame ";
+            detail += std::to_string(f);
+            detail += ": ";
+            detail += std::to_string(animation.scene.triangleCount());
+            detail += " triangles";
+            bar.update(f - first, detail);
+        }
         // A still scene is its base scene: no copy of its meshes (18 MB on a 1M-triangle mesh).
         std::optional<Scene> moved;
         if (!animation.frames.empty()) moved = animation.sceneAt(f);
         const oracle::Truth t = oracle::findIntersections(moved ? *moved : animation.scene, options);
         size_t self = 0;
         for (const oracle::IntersectingPair& p : t.pairs) self += p.selfPair();
+        bar.update(f - first + 1);
+        const study::Progress::Pause pause(&bar);  // the frame's line on stdout
         std::printf(
             "frame %zu: %zu intersecting pair(s): %zu crossing, %zu touching (%zu within objects, %zu between); "
             "%zu degenerate triangle(s); %zu triangles, %zu candidate pairs; %.1f ms (setup %.1f, build %.1f, "
@@ -81,6 +95,7 @@ int runOracle(const OracleCommandOptions& o) {
                           {"seconds", t.totalSeconds},
                           {"pairs", pairs}});
     }
+    bar.finish();
     if (!o.json.empty()) {
         nlohmann::ordered_json objects = nlohmann::ordered_json::array();
         for (const Object& obj : animation.scene.objects) objects.push_back(obj.name);
@@ -170,6 +185,7 @@ void addOracleCommand(CLI::App& app, Action& action) {
     sub->add_flag("--weld", o->weld, "Treat bit-identical vertices of an object as one vertex (soups)");
     sub->add_option("--broad-phase", o->broadPhase, "grid (ours, faster) | embree (Embree 3 rtcCollide); same pairs")
         ->capture_default_str();
+    addProgressOption(sub, o->progress);
     sub->callback([o, &action] { action = [o] { return runOracle(*o); }; });
 }
 

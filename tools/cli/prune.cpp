@@ -12,6 +12,7 @@
 #include "cullide/provenance.h"
 #include "cullide/raster/backends.h"
 #include "cullide/scene_io.h"
+#include "cullide/study/progress.h"
 #include "cullide/study/study.h"
 
 #include <nlohmann/json.hpp>
@@ -19,6 +20,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 
 namespace cullide::cli {
@@ -33,6 +35,7 @@ struct PruneOptions {
     std::string json, out;
     std::string frames;  // folder for the Figure 12 pictures
     bool check = false, exact = false;  // against the exact oracle (oracle.h)
+    study::ProgressMode progress = study::ProgressMode::Auto;
 };
 
 // The scene at one frame as one mesh, PCS triangles green and the rest grey (Figures 6 and 7).
@@ -62,9 +65,24 @@ int runPrune(const PruneOptions& o) {
                 options.hierarchy.branching, backend->describe().c_str());
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
     bool guaranteeBroken = false;  // --check found a false prune the method promises not to make
+    study::Progress bar("prune", last - first, "frames", o.progress);
     for (size_t f = first; f < last; ++f) {
+        const size_t done = f - first;
+        std::string frameName = "frame ";  // built stepwise: GCC 12's -Wrestrict on "..." + std::string
+        frameName += std::to_string(f);
+        bar.update(done, frameName);
         const Scene scene = animation.sceneAt(f);
         CullideOptions frameOptions = options;
+        // Within a frame, per reducePCS call: a large scene's frame can take minutes. Set only when
+        // the bar is drawn, so that a hidden bar leaves the run exactly as it was.
+        if (bar.shown())
+            frameOptions.onPassStats = [&, directions = options.directions.size()](const PassStats& st) {
+                if (!bar.due()) return;
+                char text[160];
+                std::snprintf(text, sizeof text, "%s: level %u, direction %u/%zu, PCS %zu triangles", frameName.c_str(),
+                              st.level, st.direction + 1, directions, st.trianglesOut);
+                bar.update(done, text);
+            };
         std::unique_ptr<PcsPictures> pictures;
         if (!o.frames.empty()) {
             // The paper's Figure 12: the PCS after each reducePCS, from a fixed three-quarter view.
@@ -89,6 +107,8 @@ int runPrune(const PruneOptions& o) {
         std::map<uint32_t, size_t> perObject;
         for (const PcsTriangle& p : r.pcs) ++perObject[p.object];
         const size_t total = scene.triangleCount();
+        std::optional<study::Progress::Pause> pause;  // the lines below go to stdout
+        pause.emplace(&bar);
         std::printf(
             "frame %zu: PCS %zu of %zu triangles (%.2f%%) in %zu object(s); %u level(s), %zu reducePCS calls, "
             "%zu triangles rendered, %zu queries; hierarchy %.1f ms, total %.1f ms\n",
@@ -108,12 +128,20 @@ int runPrune(const PruneOptions& o) {
                               {"total_seconds", r.totalSeconds}});
         }
         if (o.check || o.exact) {
+            pause.reset();
+            std::string detail = frameName;
+            detail += o.check ? ": oracle check" : ": exact stage";
+            bar.update(done, detail);
+            pause.emplace(&bar);  // checkPcs prints its lines
             const PcsCheck c = checkPcs(scene, r.pcs, options, o.check, o.exact);
             guaranteeBroken = guaranteeBroken || c.guaranteeBroken;
             if (!o.json.empty()) frames.back().update(c.json);
         }
         if (!o.out.empty()) writePcsPly(scene, r.pcs, o.out);
+        pause.reset();
+        bar.update(done + 1);
     }
+    bar.finish();
     if (!o.json.empty()) {
         nlohmann::ordered_json objects = nlohmann::ordered_json::array();
         for (const Object& obj : animation.scene.objects) objects.push_back(obj.name);
@@ -164,6 +192,7 @@ void addPruneCommand(CLI::App& app, Action& action) {
                   "Measure the PCS against the exact oracle: false prunes by class, false positives, efficiency "
                   "(exit status 1 on a false prune the method promises not to make)");
     sub->add_flag("--exact", o->exact, "Run the exact stage on the PCS: the final intersecting pairs of the pipeline");
+    addProgressOption(sub, o->progress);
     sub->callback([o, sub, &action] {
         checkCullideOptions(sub, o->cullide);
         if (sub->count("--threads") && o->backend != "cpu")

@@ -9,8 +9,6 @@
 #include "cullide/study/probes.h"
 #include "cullide/study/study.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdio>
 
@@ -28,6 +26,7 @@ struct StudyCliOptions {
     std::string shard;
     std::string out = "study.csv";
     bool quiet = false;
+    study::ProgressMode progress = study::ProgressMode::Auto;
     // Stability sweeps
     std::string stability;
     int trials = 0, resolution = 0;
@@ -110,7 +109,7 @@ void refuseInapplicable(const StudyCliOptions& o, const CLI::App& sub) {
     }
     if (!o.spec.empty()) throw CLI::ValidationError("spec", "a study spec does not apply to --stability");
     for (const char* name : {"--preset", "--resolutions", "--hierarchies", "--leaf-sizes", "--backends", "--threads",
-                             "--repeats", "--no-oracle", "--shard"})
+                             "--repeats", "--no-oracle", "--shard", "--progress"})
         refuse(name, "does not apply to --stability");
     if (o.stability != "tilt") refuse("--directions", "applies to --stability tilt only");
     if (o.stability != "jitter") refuse("--scenes", "applies to --stability jitter only");
@@ -129,7 +128,7 @@ int runStudyCommand(const StudyCliOptions& o) {
                      "cullide: warning: threads apply to the cpu backend only; the gl and vulkan runs ignore them\n");
     if (!o.shard.empty()) so.shard = study::parseShard(o.shard);
     so.out = o.out;
-    so.progress = !o.quiet && isatty(2);
+    so.progress = o.quiet ? study::ProgressMode::Never : o.progress;
     size_t unexplained = 0;
     so.onRecord = [&](const nlohmann::ordered_json& r) {
         if (!r["fp_unexplained"].is_null()) unexplained += r["fp_unexplained"].get<size_t>();
@@ -180,7 +179,8 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("-o,--out", o->out,
                     "Output .csv (JSON lines beside it as .jsonl); existing runs are skipped (resume)")
         ->capture_default_str();
-    sub->add_flag("-q,--quiet", o->quiet, "No per-run lines and no progress bar");
+    sub->add_flag("-q,--quiet", o->quiet, "No per-run lines and no progress bar (whatever --progress says)");
+    addProgressOption(sub, o->progress);
     sub->add_option("--stability", o->stability,
                     "Run a stability sweep instead: penetration | tilt | overlap | jitter (CSV to --out)");
     sub->add_option("--trials", o->trials, "Stability: trials per point")->check(CLI::Range(1, 100000));

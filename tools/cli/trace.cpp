@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -43,7 +44,8 @@ Json workloadJson(const std::string& scene, const CullideOptions& options) {
 }
 
 Recording recordTrace(const Animation& animation, size_t first, size_t last, const CullideOptions& options,
-                      const raster::TraceRules& rules, int threads, const std::string& path, const Json& workload) {
+                      const raster::TraceRules& rules, int threads, const std::string& path, const Json& workload,
+                      study::Progress* bar) {
     if (options.method == CullMethod::Reliable)
         throw InputError("option --method",
                          "the reliable method's conservative commands have no GL or Vulkan counterpart; trace the "
@@ -57,10 +59,29 @@ Recording recordTrace(const Animation& animation, size_t first, size_t last, con
     raster::TraceWriter writer(path, rules, workload, toJson(provenance(threads, {}, false)));
     raster::TraceRecorder recorder(*cpu, writer, rules, threads);
     Recording out;
+    const bool shown = bar && bar->shown();
     for (size_t f = first; f < last; ++f) {
+        std::string frameName = "frame ";
+        frameName += std::to_string(f);
+        if (shown) bar->update(f - first, frameName);
+        CullideOptions frameOptions = options;
+        // Within a frame, per reducePCS call; set only when the bar is drawn (nothing else changes).
+        if (shown)
+            frameOptions.onPassStats = [&, directions = options.directions.size()](const PassStats& st) {
+                if (!bar->due()) return;
+                char text[160];
+                std::snprintf(text, sizeof text, "%s: level %u, direction %u/%zu, PCS %zu triangles", frameName.c_str(),
+                              st.level, st.direction + 1, directions, st.trianglesOut);
+                bar->update(f - first, text);
+            };
         recorder.setFrame(uint32_t(f));
-        out.pcs.push_back(runCullide(animation.sceneAt(f), recorder, options).pcs);
+        out.pcs.push_back(runCullide(animation.sceneAt(f), recorder, frameOptions).pcs);
+        if (shown) {
+            frameName += ": intervals";
+            bar->update(f - first, frameName);
+        }
         recorder.endFrame();
+        if (shown) bar->update(f - first + 1);
     }
     out.bytes = recorder.finish();
     out.queries = recorder.queries();
@@ -212,6 +233,7 @@ struct RecordOptions {
     int threads = 0;
     long frame = -1;
     raster::TraceRules rules;
+    study::ProgressMode progress = study::ProgressMode::Auto;
 };
 
 int runRecord(const RecordOptions& o) {
@@ -219,8 +241,10 @@ int runRecord(const RecordOptions& o) {
     const Animation animation = loadScene(o.scene);
     const auto [first, last] = selectFrames(animation, o.frame, o.scene);
     const auto start = std::chrono::steady_clock::now();
+    study::Progress bar("trace record", last - first, "frames", o.progress);
     const Recording r =
-        recordTrace(animation, first, last, options, o.rules, o.threads, o.out, workloadJson(o.scene, options));
+        recordTrace(animation, first, last, options, o.rules, o.threads, o.out, workloadJson(o.scene, options), &bar);
+    bar.finish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const raster::TraceReader trace(o.out);
     const Json& s = trace.header()["summary"];
@@ -243,6 +267,7 @@ int runRecord(const RecordOptions& o) {
 struct ReplayOptions {
     std::string trace, backend = "cpu", out;
     int threads = 0;
+    study::ProgressMode progress = study::ProgressMode::Auto;
 };
 
 int runReplay(const ReplayOptions& o) {
@@ -270,7 +295,12 @@ int runReplay(const ReplayOptions& o) {
     const auto start = std::chrono::steady_clock::now();
     raster::TraceResults results;
     results.backend = backend->describe();
-    results.results = raster::replayTrace(trace, *backend);
+    {
+        study::Progress bar("trace replay", trace.listCount(), "command lists", o.progress);
+        std::function<void(size_t, size_t)> onList;  // empty when hidden: the replay as it was
+        if (bar.shown()) onList = [&bar](size_t done, size_t) { bar.update(done); };
+        results.results = raster::replayTrace(trace, *backend, onList);
+    }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     raster::writeTraceResults(o.out, results, o.trace, toJson(provenance(o.threads, drivers)));
     size_t queries = 0;
@@ -361,6 +391,13 @@ void checkCullideOptions(const CLI::App* sub, const OptionText& o) {
         throw CLI::ValidationError("--seed", "applies to --hierarchy random only");
 }
 
+void addProgressOption(CLI::App* sub, study::ProgressMode& mode) {
+    sub->add_option_function<std::string>(
+           "--progress", [&mode](const std::string& text) { mode = study::parseProgressMode(text); },
+           "Progress bar on stderr: auto (when stderr is a terminal; the default) | always | never")
+        ->type_name("MODE");
+}
+
 void addTraceRuleOptions(CLI::App* sub, raster::TraceRules& rules) {
     sub->add_option("--subpixel-bits", rules.subpixelBits, "The reference's subpixel bits")
         ->check(CLI::Range(raster::kMinSubpixelBits, raster::kMaxSubpixelBits))
@@ -390,6 +427,7 @@ void addTraceCommand(CLI::App& app, Action& action) {
     rec->add_option("--frame", r->frame, "Record only this frame (default: every frame)")
         ->check(CLI::NonNegativeNumber);
     addTraceRuleOptions(rec, r->rules);
+    addProgressOption(rec, r->progress);
     rec->callback([r, rec, &action] {
         checkCullideOptions(rec, r->cullide);
         action = [r] { return runRecord(*r); };
@@ -407,6 +445,7 @@ void addTraceCommand(CLI::App& app, Action& action) {
     rep->add_option("-o,--out", p->out, "The results file to write (JSON)")->required();
     rep->add_option("--threads", p->threads, "Worker threads of the CPU backend (0: all cores; 1 to 1024)")
         ->check(CLI::Range(0, 1024));
+    addProgressOption(rep, p->progress);
     rep->callback([p, rep, &action] {
         if (rep->count("--threads") && p->backend != "cpu")
             throw CLI::ValidationError("--threads", "applies to --backend cpu only");

@@ -5,6 +5,7 @@
 #include "cullide/cullide.h"
 #include "cullide/raster/trace.h"
 #include "cullide/scene.h"
+#include "cullide/study/progress.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -25,10 +26,10 @@ struct Recording {
 
 // Runs Cullide on the CPU reference (configured by `rules`, `threads` workers) over frames
 // [first, last) of `animation`, recording every command list into `path`. `workload` describes
-// the run for the header.
+// the run for the header. `bar` (optional) counts frames: frame k of the range is step k.
 Recording recordTrace(const Animation& animation, size_t first, size_t last, const CullideOptions& options,
                       const raster::TraceRules& rules, int threads, const std::string& path,
-                      const nlohmann::ordered_json& workload);
+                      const nlohmann::ordered_json& workload, study::Progress* bar = nullptr);
 
 // The run's options as the trace header's "workload".
 nlohmann::ordered_json workloadJson(const std::string& scene, const CullideOptions& options);

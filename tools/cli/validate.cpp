@@ -22,7 +22,9 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace cullide::cli {
@@ -36,6 +38,7 @@ struct ValidateOptions {
     std::string backend = "gl";
     size_t worst = 10;
     double depthLsb = 2.0;
+    study::ProgressMode progress = study::ProgressMode::Auto;
 };
 
 // The recorded trace: kept at --trace, or a scratch file removed when validation ends.
@@ -84,15 +87,23 @@ int runValidate(const ValidateOptions& o) {
         ? o.trace
         : (std::filesystem::temp_directory_path() / ("cullide-validate-" + std::to_string(::getpid()) + ".trace"))
               .string();
+    // One bar per stage, each left on its own line: record, replay, the final PCS.
+    std::optional<study::Progress> bar;
+    bar.emplace("validate: record", last - first, "frames", o.progress);
     const Recording recording =
-        recordTrace(animation, first, last, options, rules, 0, scratch.path, workloadJson(o.scene, options));
+        recordTrace(animation, first, last, options, rules, 0, scratch.path, workloadJson(o.scene, options), &*bar);
+    bar->finish();
     const raster::TraceReader trace(scratch.path);
     if (scratch.keep) std::printf("trace: %s (%.2f MB)\n", scratch.path.c_str(), double(recording.bytes) / 1e6);
 
     // 2. Replay on the GPU backend; 3. compare.
     raster::TraceResults results;
     results.backend = gpu->describe();
-    results.results = raster::replayTrace(trace, *gpu);
+    bar.emplace("validate: replay", trace.listCount(), "command lists", o.progress);
+    std::function<void(size_t, size_t)> onList;  // empty when hidden: the replay as it was
+    if (bar->shown()) onList = [&bar](size_t done, size_t) { bar->update(done); };
+    results.results = raster::replayTrace(trace, *gpu, onList);
+    bar->finish();
     const raster::TraceComparison comparison = raster::compareTrace(trace, results, name + " results");
     nlohmann::ordered_json report = reportComparison(trace, comparison, results.backend, o.worst,
                                                      toJson(provenance(0, {gpu->describe()})), "replayed on " + api);
@@ -102,9 +113,15 @@ int runValidate(const ValidateOptions& o) {
     // 4. The PCS of Cullide run on the GPU backend itself, against the reference's.
     size_t pcsDiffering = 0;
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+    std::string stage = "validate: ";  // built stepwise: GCC 12's -Wrestrict on "..." + std::string
+    stage += name;
+    stage += " PCS";
+    bar.emplace(stage, last - first, "frames", o.progress);
     for (size_t f = first; f < last; ++f) {
         const std::vector<PcsTriangle>& ref = recording.pcs[f - first];
         const CullideResult oth = runCullide(animation.sceneAt(f), *gpu, options);
+        bar->update(f - first + 1);
+        const study::Progress::Pause pause(&*bar);  // the frame's line on stdout
         std::vector<PcsTriangle> onlyRef, onlyGl;
         std::set_difference(ref.begin(), ref.end(), oth.pcs.begin(), oth.pcs.end(), std::back_inserter(onlyRef));
         std::set_difference(oth.pcs.begin(), oth.pcs.end(), ref.begin(), ref.end(), std::back_inserter(onlyGl));
@@ -119,6 +136,7 @@ int runValidate(const ValidateOptions& o) {
                           {"only_reference", onlyRef.size()},
                           {"only_" + name, onlyGl.size()}});
     }
+    bar->finish();
     std::printf("frames with a different final PCS: %zu of %zu\n", pcsDiffering, last - first);
 
     if (!o.png.empty()) {
@@ -165,6 +183,7 @@ void addValidateCommand(CLI::App& app, Action& action) {
                     "Constant depth margin of the intervals, in LSB (unorm) or 2^-24 (float)")
         ->check(CLI::Range(0.0, 1e6))
         ->capture_default_str();
+    addProgressOption(sub, o->progress);
     sub->callback([o, sub, &action] {
         checkCullideOptions(sub, o->cullide);
         action = [o] { return runValidate(*o); };

@@ -103,6 +103,9 @@ struct CullideOptions {
     // object, then triangle), e.g. to draw the paper's Figure 12. Costs a PCS expansion per
     // call when set; nothing when empty.
     std::function<void(const PassStats&, std::span<const PcsTriangle>)> onPass;
+    // Called after every reducePCS call (after onPass) with its statistics only: no PCS
+    // expansion, so it costs nothing measurable, e.g. for a progress display.
+    std::function<void(const PassStats&)> onPassStats;
     // Throws InputError naming the option on absurd values (no directions, a zero or non-finite
     // direction, a viewport outside 1..kMaxViewportSide).
     void validate() const;

@@ -3,6 +3,7 @@
 
 #include "cullide/study/causes.h"
 #include "cullide/study/measures.h"
+#include "cullide/study/progress.h"
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
@@ -428,14 +429,6 @@ void writeAll(const OutputPaths& p, const std::vector<nlohmann::ordered_json>& r
     writeFileAtomically(p.jsonl, jsonl);
 }
 
-std::string duration(double s) {
-    char buf[32];
-    if (s < 60) std::snprintf(buf, sizeof buf, "%.0fs", s);
-    else if (s < 3600) std::snprintf(buf, sizeof buf, "%dm%02ds", int(s / 60), int(s) % 60);
-    else std::snprintf(buf, sizeof buf, "%dh%02dm", int(s / 3600), int(s / 60) % 60);
-    return buf;
-}
-
 }  // namespace
 
 size_t runStudy(const StudyOptions& opt) {
@@ -461,11 +454,13 @@ size_t runStudy(const StudyOptions& opt) {
     Scene scene;
     std::unique_ptr<oracle::Truth> truth;
     std::map<std::pair<std::string, int>, std::unique_ptr<DepthBackend>> backends;
-    const auto start = Clock::now();
+    Progress bar("study", todo.size(), "runs", opt.progress);
     for (size_t i = 0; i < todo.size(); ++i) {
         const RunConfig& c = todo[i];
         const std::string key = c.scene + "@" + std::to_string(c.frame);
         if (key != sceneKey) {  // the sweep is scene-major: one scene and one oracle at a time
+            // Loading a large scene and its oracle can take a while: say so.
+            if (bar.shown()) bar.update(i, key + (opt.spec.oracle ? ": scene and oracle" : ": scene"));
             scene = loadStudyScene(c.scene, c.frame);
             truth.reset();
             if (opt.spec.oracle) truth = std::make_unique<oracle::Truth>(oracle::findIntersections(scene));
@@ -476,17 +471,13 @@ size_t runStudy(const StudyOptions& opt) {
         const nlohmann::ordered_json r = runOne(c, scene, truth.get(), opt.spec.repeats, *backend);
         csv << csvRow(r) << std::flush;
         jsonl << r.dump() << "\n" << std::flush;
-        if (opt.onRecord) opt.onRecord(r);
-        if (opt.progress) {
-            const double elapsed = secondsSince(start);
-            const double eta = elapsed / double(i + 1) * double(todo.size() - i - 1);
-            const int width = 30, filled = int(double(width) * double(i + 1) / double(todo.size()));
-            std::fprintf(stderr, "\rstudy [%s%s] %zu/%zu runs, %s elapsed, ETA %s   ",
-                         std::string(size_t(filled), '#').c_str(), std::string(size_t(width - filled), '.').c_str(),
-                         i + 1, todo.size(), duration(elapsed).c_str(), duration(eta).c_str());
-            if (i + 1 == todo.size()) std::fprintf(stderr, "\n");
+        if (opt.onRecord) {
+            const Progress::Pause pause = bar.pause();  // its lines on stdout
+            opt.onRecord(r);
         }
+        bar.update(i + 1);
     }
+    bar.finish();
     return todo.size();
 }
 

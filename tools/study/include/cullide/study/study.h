@@ -24,6 +24,7 @@
 #include "cullide/options.h"
 #include "cullide/oracle/oracle.h"
 #include "cullide/scene.h"
+#include "cullide/study/progress.h"
 
 #include <nlohmann/json.hpp>
 
@@ -130,7 +131,7 @@ struct StudyOptions {
     Spec spec;
     Shard shard;
     std::filesystem::path out;  // .csv or .jsonl
-    bool progress = false;  // progress bar with ETA on stderr
+    ProgressMode progress = ProgressMode::Never;  // the bar with ETA on stderr (progress.h)
     std::function<void(const nlohmann::ordered_json&)> onRecord;  // after each run
 };
 // Runs the sweep (or its shard), appending to the output; runs whose id is already in the
