@@ -433,9 +433,9 @@ private:
     }
 
     const Scene& scene_;
-    Scene* consumed_;
     DepthBackend& backend_;
     const CullideOptions& opt_;
+    Scene* consumed_;
     std::vector<Hierarchy> hierarchies_;
     std::vector<uint32_t> triangleOffset_;
     std::vector<Vec3f> positions_;
