@@ -50,6 +50,23 @@ struct Grid {
 
 namespace {
 
+// Per-block counts of each top digit (blocks x 256, block-major) become each block's first write
+// position for that digit, digits in order and blocks in order within a digit (so a scatter by
+// blocks is stable); bucket[d] is digit d's first position, bucket[256] the total, returned.
+size_t digitOffsets(std::vector<size_t>& counts, size_t blocks, std::array<size_t, 257>& bucket) {
+    size_t sum = 0;
+    for (size_t d = 0; d < 256; ++d) {
+        bucket[d] = sum;
+        for (size_t b = 0; b < blocks; ++b) {
+            const size_t k = counts[b * 256 + d];
+            counts[b * 256 + d] = sum;
+            sum += k;
+        }
+    }
+    bucket[256] = sum;
+    return sum;
+}
+
 // Sorts the m values at `from` by the bits [32, 32 + 8 * lowPasses) (stable), leaving them in
 // `from` when lowPasses is even and in `to` when odd (`to`: m values of scratch). LSD passes of
 // one byte each; a small bucket (most of them on small meshes, where the 256 counters of each
@@ -101,16 +118,7 @@ uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits) {
         for (size_t i = b * kBlock, e = std::min(n, i + kBlock); i < e; ++i) ++c[(v[i] >> top) & 0xff];
     });
     std::array<size_t, 257> bucket{};
-    size_t sum = 0;
-    for (size_t d = 0; d < 256; ++d) {
-        bucket[d] = sum;
-        for (size_t b = 0; b < blocks; ++b) {
-            const size_t k = count[b * 256 + d];
-            count[b * 256 + d] = sum;
-            sum += k;
-        }
-    }
-    bucket[256] = n;
+    digitOffsets(count, blocks, bucket);
     parallelForEach(0, blocks, [&](size_t b) {
         size_t* c = count.data() + b * 256;
         for (size_t i = b * kBlock, e = std::min(n, i + kBlock); i < e; ++i) tmp[c[(v[i] >> top) & 0xff]++] = v[i];
@@ -231,16 +239,7 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     for (const auto& bb : blockBig) big.insert(big.end(), bb.begin(), bb.end());
     blockBig = {};
     std::array<size_t, 257> bucket{};
-    size_t entryCount = 0;
-    for (size_t d = 0; d < 256; ++d) {
-        bucket[d] = entryCount;
-        for (size_t blk = 0; blk < boxBlocks; ++blk) {
-            const size_t k = slots[blk * 256 + d];
-            slots[blk * 256 + d] = entryCount;
-            entryCount += k;
-        }
-    }
-    bucket[256] = entryCount;
+    const size_t entryCount = digitOffsets(slots, boxBlocks, bucket);
     // Not value-initialised (every element is written): the parallel loop touches it first.
     Buffer<uint64_t> entryBuffer(entryCount);
     uint64_t* const entries = entryBuffer.data();
