@@ -13,7 +13,7 @@ namespace cullide::raster::detail {
 
 namespace {
 
-constexpr uint32_t kSetupChunk = 1024;  // triangles per setup task and per slot
+constexpr uint32_t kSetupChunk = 1024;  // triangles per setup task (and per slot)
 
 // set.chunks: the union of the ranges of `op` commands as sorted disjoint intervals (by sorting
 // the ranges when there are few, else by a difference array over the touched triangle span), cut

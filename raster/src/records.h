@@ -28,11 +28,11 @@ struct ConsRec {
 
 // The records of the triangles a list draws, in triangle order: a draw [first, first + count) is
 // the record range [begin[first], end[first + count - 1]). Setup writes the records in place: the
-// drawn triangles are cut into chunks, and each chunk owns a slot of one record per triangle,
-// which holds every chunk whose triangles need no more than one record each (all but clipped
-// ones); the slot's unused tail stays in the range, with kNoTiles, so no tile ever lists it. A
-// chunk that needs more spills to a side vector and the slots are then laid out again. Capacity
-// is kept across lists, grown to the exact need (never doubled).
+// drawn triangles are cut into chunks, and each chunk owns a slot sized by a cheap count of its
+// records (records.cpp); a slot's unused tail stays in the range, with kNoTiles, so no tile ever
+// lists it. A chunk that needs more than its slot (clipped triangles) spills to a side vector and
+// the slots are then laid out again. Capacity is kept across lists, grown to the exact need
+// (never doubled).
 template <typename Rec>
 struct RecordSet {
     std::vector<uint8_t> flags;  // per triangle drawn: TriFlags

@@ -590,12 +590,13 @@ std::vector<uint64_t> TraceRecorder::execute(const CommandList& list) {
 void TraceRecorder::endFrame() {
     reference_.releaseScratch();  // and forgets the borrowed geometry
     if (pending_.empty()) return;
-    // The geometry comes back from the writer's scratch file (the caller's copy is gone by now).
+    // The geometry comes back from the writer's scratch file (the caller's copy is gone by now),
+    // handed over, not copied.
     {
         std::vector<Vec3f> positions;
         std::vector<Triangle> triangles;
         writer_.frameGeometry(positions, triangles);
-        intervals_.setGeometry(positions, triangles);
+        intervals_.setGeometry(std::move(positions), std::move(triangles));
     }
     // The evaluator sees the same setView/execute sequence as the reference did.
     for (const PendingList& p : pending_) {
@@ -610,7 +611,7 @@ void TraceRecorder::endFrame() {
         writer_.addList(p.view, p.commands, queries);
     }
     intervals_.releaseScratch();
-    intervals_.setGeometry({}, {});
+    intervals_.setGeometry(std::vector<Vec3f>{}, std::vector<Triangle>{});
     std::vector<PendingList>().swap(pending_);
 }
 

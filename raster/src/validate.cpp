@@ -244,6 +244,11 @@ void QueryIntervals::setGeometry(std::span<const Vec3f> positions, std::span<con
     triangles_ = std::vector<Triangle>(triangles.begin(), triangles.end());
 }
 
+void QueryIntervals::setGeometry(std::vector<Vec3f>&& positions, std::vector<Triangle>&& triangles) {
+    positions_ = std::move(positions);
+    triangles_ = std::move(triangles);
+}
+
 void QueryIntervals::setView(const OrthoView& view) {
     view.validate();
     if (!haveView_ || view.width != view_.width || view.height != view_.height || !(view.depth == view_.depth)) {

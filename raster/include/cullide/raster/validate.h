@@ -78,6 +78,8 @@ public:
     QueryIntervals(QueryIntervals&&) noexcept;
     QueryIntervals& operator=(QueryIntervals&&) noexcept;
     void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles);
+    // The same, taking the arrays over instead of copying them.
+    void setGeometry(std::vector<Vec3f>&& positions, std::vector<Triangle>&& triangles);
     void setView(const OrthoView& view);
     // Intervals per query. `exact` (optional) receives the exact track's counts; `exactValid`
     // says whether they are trustworthy (no clipped triangle since the last full clear).
