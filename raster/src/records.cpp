@@ -66,9 +66,9 @@ TileRect tileRectOf(const ConsRec& r, const TileGrid& grid) {
 // Resizes `v` to n elements, reallocating to exactly n when it must grow: the contents are about
 // to be overwritten, so the old buffer goes first (no peak of both, no doubled capacity).
 template <typename T>
-void resizeForOverwrite(std::vector<T>& v, size_t n) {
+void resizeForOverwrite(RecordArray<T>& v, size_t n) {
     if (v.capacity() < n) {
-        std::vector<T>().swap(v);
+        RecordArray<T>().swap(v);
         v.reserve(n);
     }
     v.resize(n);
@@ -83,8 +83,8 @@ void relayoutSpilled(RecordSet<Rec>& set) {
     for (size_t ci = 0; ci < chunks.size(); ++ci)
         start[ci + 1] = start[ci] + std::max<size_t>(set.slotStart[ci + 1] - set.slotStart[ci], set.used[ci]);
     CULLIDE_CHECK(start.back() < size_t(UINT32_MAX), "too many triangle records for 32-bit indices");
-    std::vector<Rec> records(start.back());
-    std::vector<TileRect> tiles(start.back(), kNoTiles);
+    RecordArray<Rec> records(start.back());
+    RecordArray<TileRect> tiles(start.back(), kNoTiles);
     parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
         for (size_t ci = r.begin(); ci != r.end(); ++ci) {
             const bool spilled = !set.spillRecords[ci].empty();
@@ -200,44 +200,46 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
         const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
         return snappedHasArea(sx, sy) && boxHoldsCentre(sx, sy, params) ? 1 : 0;
     };
-    buildRecords<SubTriangles>(out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
-        SnappedTri* sub = scratch.sub;
-        const Triangle& tri = in.triangles[t];
-        int n = 0;
-        uint8_t flags;
-        const WinVertex &v0 = in.window[tri[0]], &v1 = in.window[tri[1]], &v2 = in.window[tri[2]];
-        const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
-        if (s0.inside && s1.inside && s2.inside) {  // the common case: vertices snapped once
-            if (trivialReject(v0, v1, v2, params)) {
-                flags = kRejected;
+    buildRecords<SubTriangles>(
+        out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
+            SnappedTri* sub = scratch.sub;
+            const Triangle& tri = in.triangles[t];
+            int n = 0;
+            uint8_t flags;
+            const WinVertex &v0 = in.window[tri[0]], &v1 = in.window[tri[1]], &v2 = in.window[tri[2]];
+            const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
+            if (s0.inside && s1.inside && s2.inside) {  // the common case: vertices snapped once
+                if (trivialReject(v0, v1, v2, params)) {
+                    flags = kRejected;
+                } else {
+                    const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
+                    flags = setupUnclipped(v0, v1, v2, sx, sy, params, sub, n);
+                }
             } else {
-                const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
-                flags = setupUnclipped(v0, v1, v2, sx, sy, params, sub, n);
+                flags = setupTriangle(v0, v1, v2, params, sub, n);
             }
-        } else {
-            flags = setupTriangle(v0, v1, v2, params, sub, n);
-        }
-        for (int s = 0; s < n; ++s) {
-            EdgeTri e;
-            if (makeEdgeTri(sub[s], params, e)) emit(e);
-        }
-        return flags;
-    });
+            for (int s = 0; s < n; ++s) {
+                EdgeTri e;
+                if (makeEdgeTri(sub[s], params, e)) emit(e);
+            }
+            return flags;
+        });
 }
 
 void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const WindowError& err,
                             RecordSet<ConsRec>& out) {
     drawnChunks(list, Command::Op::DrawConservative, out);
     auto countOne = [](uint32_t) -> uint32_t { return 1; };
-    buildRecords<NoScratch>(out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, NoScratch&, auto&& emit) -> uint8_t {
-        const Triangle& tri = in.triangles[t];
-        ConsRec rec;
-        if (!setupConservative(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]], in.params, err, rec.t))
-            return kRejected;
-        rec.e = consEdges(rec.t, in.params.subpixelBits);
-        emit(rec);
-        return 0;
-    });
+    buildRecords<NoScratch>(
+        out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, NoScratch&, auto&& emit) -> uint8_t {
+            const Triangle& tri = in.triangles[t];
+            ConsRec rec;
+            if (!setupConservative(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]], in.params, err, rec.t))
+                return kRejected;
+            rec.e = consEdges(rec.t, in.params.subpixelBits);
+            emit(rec);
+            return 0;
+        });
 }
 
 }  // namespace cullide::raster::detail
