@@ -274,6 +274,39 @@ TEST(Cli, PruneJsonAndPly) {
     EXPECT_NE(ply.find("property uchar red"), std::string::npos);
 }
 
+// prune over every frame keeps each object's hierarchy while its triangles are unchanged, and
+// --rebuild-hierarchy builds them every frame as the paper does. Traps: a reused hierarchy that
+// changes the PCS or a pass; a cache that never reuses (hierarchies_reused stays 0).
+TEST(Cli, PruneReusesHierarchiesAcrossFrames) {
+    const fs::path d = freshDir("prune-reuse");
+    const std::string scene = quote(kData + "/scenes/bunny_through_cow.json");
+    nlohmann::json runs[2];
+    const char* modes[2] = {"", " --rebuild-hierarchy"};
+    for (int k = 0; k < 2; ++k) {
+        std::string json = (d / ("run" + std::to_string(k) + ".json")).string();
+        std::string command = "prune " + scene + " --resolution 128 --json ";
+        command += quote(json);
+        command += modes[k];
+        const CliRun r = runCli(command);
+        ASSERT_EQ(r.status, 0) << r.output;
+        runs[k] = nlohmann::json::parse(readAll(json));
+        if (k == 0) EXPECT_NE(r.output.find("(reused)"), std::string::npos) << r.output;
+        else EXPECT_EQ(r.output.find("reused"), std::string::npos) << r.output;
+    }
+    const auto& reused = runs[0].at("frames");
+    const auto& rebuilt = runs[1].at("frames");
+    ASSERT_EQ(reused.size(), rebuilt.size());
+    ASSERT_GT(reused.size(), 1u);
+    for (size_t f = 0; f < reused.size(); ++f) {
+        EXPECT_EQ(reused[f].at("pcs"), rebuilt[f].at("pcs")) << "frame " << f;
+        ASSERT_EQ(reused[f].at("passes").size(), rebuilt[f].at("passes").size());
+        for (size_t p = 0; p < reused[f].at("passes").size(); ++p)
+            EXPECT_EQ(reused[f].at("passes")[p].at("triangles_out"), rebuilt[f].at("passes")[p].at("triangles_out"));
+        EXPECT_EQ(reused[f].at("hierarchies_reused").get<int>(), f == 0 ? 0 : 2) << "two objects, frame " << f;
+        EXPECT_EQ(rebuilt[f].at("hierarchies_reused").get<int>(), 0);
+    }
+}
+
 // A valid spec mutated field by field (wrong type, empty list, huge and negative numbers) and an
 // unknown field: every one is refused with exit status 2 and a message naming the field, before
 // anything runs, never by a signal (the issue's `"branching": []` once ended in an uncaught

@@ -2,6 +2,8 @@
 #include "cullide/cullide.h"
 
 #include "cullide/error.h"
+#include "cullide/generators.h"
+#include "cullide/mesh_io.h"
 #include "cullide/options.h"
 #include "cullide/oracle/oracle.h"
 #include "cullide/raster/cpu_backend.h"
@@ -240,6 +242,36 @@ TEST(Cullide, ConsumedSceneGivesTheSamePcsAndIsEmptied) {
     EXPECT_EQ(got.pcs, expected.pcs);
     EXPECT_FALSE(expected.pcs.empty());
     EXPECT_TRUE(consumed.objects.empty());  // NOLINT(bugprone-use-after-move): emptied on purpose
+}
+
+// A deforming animation pruned frame by frame with a hierarchy cache: the PCS and every pass
+// are those of fresh builds (trap: a reused hierarchy that no longer matches the geometry), the
+// first frame builds and the later ones reuse, and a frame with other triangles rebuilds.
+TEST(Cullide, HierarchyCacheGivesTheSamePcsOverFrames) {
+    const Mesh source = loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/bunny.off");
+    SceneRequest req;
+    req.triangles = 4000;
+    req.frames = 4;
+    const Animation a = makeDeformedBunny(source, req);
+    auto backend = raster::makeCpuBackend();
+    CullideOptions fresh;
+    CullideOptions cached = fresh;
+    cached.hierarchyCache = std::make_shared<HierarchyCache>();
+    for (size_t f = 0; f < a.frameCount(); ++f) {
+        const Scene s = a.sceneAt(f);
+        const CullideResult want = runCullide(s, *backend, fresh), got = runCullide(s, *backend, cached);
+        EXPECT_EQ(got.pcs, want.pcs) << "frame " << f;
+        ASSERT_EQ(got.passes.size(), want.passes.size());
+        for (size_t k = 0; k < got.passes.size(); ++k)
+            EXPECT_EQ(got.passes[k].trianglesOut, want.passes[k].trianglesOut);
+        EXPECT_EQ(got.hierarchiesReused, f == 0 ? 0u : 1u) << "frame " << f;
+        EXPECT_EQ(want.hierarchiesReused, 0u);
+    }
+    Scene other = a.sceneAt(0);
+    other.objects[0].mesh.triangles.pop_back();
+    const CullideResult rebuilt = runCullide(other, *backend, cached);
+    EXPECT_EQ(rebuilt.hierarchiesReused, 0u);
+    EXPECT_EQ(rebuilt.pcs, runCullide(other, *backend, fresh).pcs);
 }
 
 // A ribbon that passes through itself: one object, so only the modified method can see it. The

@@ -336,6 +336,43 @@ TEST(Hierarchy, Deterministic) {
     EXPECT_NE(r1.order, r2.order);
 }
 
+// The cache across frames. Traps: reusing a hierarchy after the triangles, the vertex count or
+// an option changed (a stale permutation of the wrong triangles); rebuilding when only positions
+// moved (the reuse would never happen); a reused hierarchy that differs from a fresh build.
+TEST(Hierarchy, CacheReusesOnlyForUnchangedTriangles) {
+    Mesh m = grid(12);
+    HierarchyOptions o;
+    HierarchyCache cache;
+    cache.resize(2);
+    const Hierarchy first = cache.get(0, m, o);
+    EXPECT_FALSE(cache.reused(0));
+    for (Vec3f& p : m.positions) p = Vec3f(p.x() * 2.0f, p.y() + 0.25f * p.x() * p.x(), p.z() + 1.0f);  // deformed
+    const Hierarchy& moved = cache.get(0, m, o);
+    EXPECT_TRUE(cache.reused(0));
+    EXPECT_EQ(moved.order, buildHierarchy(m, o).order);
+    EXPECT_EQ(moved.order, first.order);
+
+    Mesh flipped = m;
+    std::swap(flipped.triangles[5][1], flipped.triangles[5][2]);  // same count, other triangles
+    EXPECT_EQ(cache.get(0, flipped, o).order, buildHierarchy(flipped, o).order);
+    EXPECT_FALSE(cache.reused(0));
+    EXPECT_TRUE((cache.get(0, flipped, o), cache.reused(0)));
+
+    HierarchyOptions leaf4 = o;
+    leaf4.leafSize = 4;
+    EXPECT_EQ(cache.get(0, flipped, leaf4).nodes.size(), buildHierarchy(flipped, leaf4).nodes.size());
+    EXPECT_FALSE(cache.reused(0));
+
+    Mesh extraVertex = flipped;
+    extraVertex.positions.push_back(Vec3f(9, 9, 9));
+    cache.get(0, extraVertex, leaf4);
+    EXPECT_FALSE(cache.reused(0));
+
+    // Objects are kept apart: object 1's first call builds, whatever object 0 holds.
+    cache.get(1, extraVertex, leaf4);
+    EXPECT_FALSE(cache.reused(1));
+}
+
 // Tiny and empty meshes: a single triangle is a leaf root; an empty mesh an empty root.
 TEST(Hierarchy, TinyAndEmpty) {
     Mesh one;

@@ -178,7 +178,7 @@ public:
             return result;
         }
         for (uint32_t i = 0; i < hierarchies_.size(); ++i)
-            if (!hierarchies_[i].nodes.empty() && hierarchies_[i].nodes[0].count > 0) pcs.push_back(item(i, 0));
+            if (!hierarchies_[i]->nodes.empty() && hierarchies_[i]->nodes[0].count > 0) pcs.push_back(item(i, 0));
 
         for (uint32_t level = 0; !pcs.empty(); ++level) {
             result.levels = level + 1;
@@ -209,11 +209,21 @@ private:
         const auto start = Clock::now();
         std::vector<Mesh> world(n);
         hierarchies_.resize(n);
+        HierarchyCache* cache = opt_.hierarchyCache.get();
+        if (cache) cache->resize(n);
+        else built_.resize(n);
         parallelForEach(0, n, [&](size_t i) {
             world[i] = scene_.worldMesh(i);
-            hierarchies_[i] = buildHierarchy(world[i], opt_.hierarchy);
+            if (cache) {
+                hierarchies_[i] = &cache->get(i, world[i], opt_.hierarchy);
+            } else {
+                built_[i] = buildHierarchy(world[i], opt_.hierarchy);
+                hierarchies_[i] = &built_[i];
+            }
         });
         result.hierarchySeconds = secondsSince(start);
+        if (cache)
+            for (size_t i = 0; i < n; ++i) result.hierarchiesReused += cache->reused(i) ? 1 : 0;
 
         triangleOffset_.assign(n, 0);
         size_t vertices = 0, triangles = 0;
@@ -231,7 +241,7 @@ private:
         for (size_t i = 0; i < n; ++i) {
             const uint32_t base = uint32_t(positions_.size());
             positions_.insert(positions_.end(), world[i].positions.begin(), world[i].positions.end());
-            for (uint32_t t : hierarchies_[i].order) {
+            for (uint32_t t : hierarchies_[i]->order) {
                 const Triangle& tri = world[i].triangles[t];
                 triangles_.push_back({tri[0] + base, tri[1] + base, tri[2] + base});
             }
@@ -245,7 +255,7 @@ private:
     std::vector<PcsTriangle> expand(const std::vector<Item>& items) const {
         std::vector<PcsTriangle> out;
         for (const Item& it : items) {
-            const Hierarchy& h = hierarchies_[it.object];
+            const Hierarchy& h = *hierarchies_[it.object];
             const HierarchyNode& n = node(it);
             for (uint32_t k = n.first; k < n.first + n.count; ++k) out.push_back({it.object, h.order[k]});
         }
@@ -253,10 +263,10 @@ private:
         return out;
     }
 
-    const HierarchyNode& node(const Item& it) const { return hierarchies_[it.object].nodes[it.node]; }
+    const HierarchyNode& node(const Item& it) const { return hierarchies_[it.object]->nodes[it.node]; }
 
     Item item(uint32_t object, uint32_t nodeIndex) const {
-        const HierarchyNode& n = hierarchies_[object].nodes[nodeIndex];
+        const HierarchyNode& n = hierarchies_[object]->nodes[nodeIndex];
         return {object, nodeIndex, {triangleOffset_[object] + n.first, n.count}};
     }
 
@@ -267,7 +277,7 @@ private:
         std::vector<Item> pcs;
         uint32_t depth = 0;
         for (uint32_t i = 0; i < hierarchies_.size(); ++i) {
-            const Hierarchy& h = hierarchies_[i];
+            const Hierarchy& h = *hierarchies_[i];
             std::vector<Item> leaves;
             for (uint32_t k = 0; k < h.nodes.size(); ++k)
                 if (h.nodes[k].isLeaf() && h.nodes[k].count > 0) {
@@ -285,7 +295,7 @@ private:
         const detail::UnitGraph all = detail::unitAdjacency(triangles_, ranges_);
         const std::vector<uint8_t> hits = detail::exactHits(positions_, triangles_, ranges_, all);
         exactHit_.assign(hierarchies_.size(), {});
-        for (uint32_t i = 0; i < hierarchies_.size(); ++i) exactHit_[i].assign(hierarchies_[i].nodes.size(), 0);
+        for (uint32_t i = 0; i < hierarchies_.size(); ++i) exactHit_[i].assign(hierarchies_[i]->nodes.size(), 0);
         for (size_t u = 0; u < pcs.size(); ++u) exactHit_[pcs[u].object][pcs[u].node] = hits[u];
         for (uint32_t d = 0; d < opt_.directions.size() && !pcs.empty(); ++d)
             pcs = reduceReliable(pcs, depth, d, result.passes);
@@ -436,7 +446,8 @@ private:
     DepthBackend& backend_;
     const CullideOptions& opt_;
     Scene* consumed_;
-    std::vector<Hierarchy> hierarchies_;
+    std::vector<Hierarchy> built_;  // without a cache: this run's hierarchies
+    std::vector<const Hierarchy*> hierarchies_;  // per object: in built_ or in the cache
     std::vector<uint32_t> triangleOffset_;
     std::vector<Vec3f> positions_;
     std::vector<Triangle> triangles_;

@@ -31,6 +31,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <utility>
@@ -106,6 +107,10 @@ struct CullideOptions {
     // Called after every reducePCS call (after onPass) with its statistics only: no PCS
     // expansion, so it costs nothing measurable, e.g. for a progress display.
     std::function<void(const PassStats&)> onPassStats;
+    // Keeps each object's hierarchy across runs (frames) and reuses it while the object's
+    // triangles are unchanged (hierarchy.h): the same PCS, bit for bit, without the per-frame
+    // build. Empty: every run builds its hierarchies, as the paper does.
+    std::shared_ptr<HierarchyCache> hierarchyCache;
     // Throws InputError naming the option on absurd values (no directions, a zero or non-finite
     // direction, a viewport outside 1..kMaxViewportSide).
     void validate() const;
@@ -114,7 +119,8 @@ struct CullideOptions {
 struct CullideResult {
     std::vector<PcsTriangle> pcs;  // sorted by (object, triangle)
     std::vector<PassStats> passes;
-    double hierarchySeconds = 0;  // building every object's hierarchy
+    double hierarchySeconds = 0;  // building (or reusing) every object's hierarchy
+    uint32_t hierarchiesReused = 0;  // objects whose hierarchy came from options.hierarchyCache
     double totalSeconds = 0;  // everything, hierarchy and geometry upload included
     uint32_t levels = 0;  // hierarchy levels visited
 };

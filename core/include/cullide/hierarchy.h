@@ -56,8 +56,40 @@ struct Hierarchy {
     uint32_t depth() const;  // deepest node's depth
 };
 
+bool operator==(const HierarchyOptions& a, const HierarchyOptions& b);
+
 // Builds the hierarchy of `mesh` (any triangle soup; an empty mesh gives a single empty root).
 // Throws InputError("hierarchy options", ...) on leafSize < 1 or branching < 2.
 Hierarchy buildHierarchy(const Mesh& mesh, const HierarchyOptions& options);
+
+// Each object's hierarchy kept from one frame to the next. A hierarchy is a function of the
+// object's triangles (vertex indices), its vertex count and the options, never of its positions
+// (Connectivity grows over edges shared by vertex index, Random draws from the triangle count and
+// seed), so a deforming object whose triangles are unchanged gets the same hierarchy, bit for
+// bit, and Cullide the same PCS, without the build the paper pays every frame. The test is exact:
+// the kept triangles are compared in full (12 bytes per triangle kept beside the hierarchy).
+// get() on distinct objects may run concurrently after resize(); one cache serves one run at a
+// time.
+class HierarchyCache {
+public:
+    // Makes room for `objects` objects (keeping what the first ones hold).
+    void resize(size_t objects);
+    // The hierarchy of object `object` (< the size given to resize) for `mesh`: the kept one when
+    // the mesh's triangles, vertex count and `options` equal the last call's for that object, else
+    // a new build, kept for next time.
+    const Hierarchy& get(size_t object, const Mesh& mesh, const HierarchyOptions& options);
+    // Whether the last get() for `object` reused the kept hierarchy.
+    bool reused(size_t object) const { return entries_[object].reused; }
+
+private:
+    struct Entry {
+        std::vector<Triangle> triangles;
+        size_t vertexCount = 0;
+        HierarchyOptions options;
+        Hierarchy hierarchy;
+        bool valid = false, reused = false;
+    };
+    std::vector<Entry> entries_;
+};
 
 }  // namespace cullide
