@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite, from a fresh Debian 12 machine: installs the Debian packages the project
-# needs (tools/setup.sh), builds in Release, runs every test with CTest, then builds and runs the
+# needs (tools/setup.sh), builds in Release, runs every test with CTest and the README's Slurm recipe
+# on a private single-node cluster (tools/cluster/slurm-smoke.sh, as root), then builds and runs the
 # test suite under AddressSanitizer+UndefinedBehaviorSanitizer and under ThreadSanitizer.
 # The ThreadSanitizer build links a oneTBB built with -fsanitize=thread from Debian's source package
 # of the installed libtbb-dev (tools/sanitizers/build-tbb-tsan.sh: adds a deb-src entry for Debian's
@@ -27,6 +28,10 @@ run_suite() {  # preset name, build dir, extra configure arguments
 }
 
 run_suite release build
+echo "== test.sh: the README's Slurm recipe (tools/cluster/slurm-smoke.sh)"
+sudo=""
+[ "$(id -u)" -eq 0 ] || sudo="sudo" # munged's key must belong to the munge user
+$sudo bash tools/cluster/slurm-smoke.sh build/tools/cullide
 if [ "${CULLIDE_SANITIZERS:-1}" != "0" ]; then
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tools/sanitizers/tsan.supp"
