@@ -156,6 +156,45 @@ TEST(RasterRules, InclusiveEdges) {
     }
 }
 
+// readDepthInto gives readDepth's image, shape and format included, into a buffer it reuses
+// (traps: a stale size or format after the view changes; a fresh allocation per read, which made
+// the study's cause attribution page-fault through every image).
+TEST(CpuBackend, ReadDepthIntoReusesTheBuffer) {
+    auto b = makeCpuBackend();
+    DepthImage into;
+    b->readDepthInto(into);
+    EXPECT_TRUE(into.values.empty()) << "no view yet";
+    OrthoView v = windowView(40, 30);
+    const std::vector<Vec3f> positions{{2, 2, 0.25f}, {30, 3, 0.5f}, {5, 25, 0.75f}};
+    const std::vector<Triangle> triangles{{0, 1, 2}};
+    b->setGeometry(positions, triangles);
+    b->setView(v);
+    CommandList l;
+    l.clear(1.0);
+    l.depthFunc(DepthFunc::Less);
+    l.draw(0, 1);
+    b->execute(l);
+    b->readDepthInto(into);
+    const DepthImage want = b->readDepth();
+    EXPECT_EQ(into.width, 40);
+    EXPECT_EQ(into.height, 30);
+    EXPECT_EQ(into.values, want.values);
+    const uint32_t* buffer = into.values.data();
+    b->execute(l);
+    b->readDepthInto(into);
+    EXPECT_EQ(into.values.data(), buffer) << "same size: the buffer is reused";
+    v = windowView(20, 10);
+    v.depth = DepthFormat::float32();
+    b->setView(v);
+    b->execute(l);
+    b->readDepthInto(into);
+    const DepthImage small = b->readDepth();
+    EXPECT_EQ(into.width, 20);
+    EXPECT_EQ(into.height, 10);
+    EXPECT_TRUE(into.format == small.format);
+    EXPECT_EQ(into.values, small.values);
+}
+
 // Trap: bad options silently accepted.
 TEST(CpuBackend, RejectsBadOptions) {
     CpuBackendOptions o;

@@ -190,9 +190,17 @@ public:
     }
 
     DepthImage readDepth() override {
-        DepthImage img = imageOfView<DepthImage>();
-        if (haveView_) img.values = depth_;
+        DepthImage img;
+        readDepthInto(img);
         return img;
+    }
+
+    void readDepthInto(DepthImage& out) override {
+        std::vector<uint32_t> values = std::move(out.values);  // its buffer is reused
+        out = imageOfView<DepthImage>();
+        if (haveView_) values.assign(depth_.begin(), depth_.end());
+        else values.clear();
+        out.values = std::move(values);
     }
 
 private:

@@ -685,4 +685,8 @@ DepthImage TeeBackend::readDepth() {
     return reference_.readDepth();
 }
 
+void TeeBackend::readDepthInto(DepthImage& out) {
+    reference_.readDepthInto(out);
+}
+
 }  // namespace cullide::raster

@@ -205,6 +205,10 @@ public:
 
     // The current depth buffer.
     virtual DepthImage readDepth() = 0;
+    // The same into `out`, whose buffer a backend may reuse: for callers that read many images
+    // in a row (the study's false-prune causes read three per missed pair), where a fresh
+    // buffer per image costs its page faults every time.
+    virtual void readDepthInto(DepthImage& out) { out = readDepth(); }
 };
 
 // Immediate mode over any backend, for tests and exploration. Outside a query each call executes

@@ -54,11 +54,17 @@ int64_t storedOrder(uint32_t v) {
 
 PairSample samplePair(DepthBackend& backend, const std::array<Vec3f, 3>& t, const std::array<Vec3f, 3>& x,
                       const OrthoView& view) {
+    PairSampleScratch scratch;
+    return samplePair(backend, t, x, view, scratch);
+}
+
+PairSample samplePair(DepthBackend& backend, const std::array<Vec3f, 3>& t, const std::array<Vec3f, 3>& x,
+                      const OrthoView& view, PairSampleScratch& scratch) {
     const std::array<Vec3f, 6> positions{t[0], t[1], t[2], x[0], x[1], x[2]};
     const std::array<Triangle, 2> triangles{Triangle{0, 1, 2}, Triangle{3, 4, 5}};
     backend.setGeometry(positions, triangles);
     backend.setView(view);
-    DepthImage img[2];
+    DepthImage* const img[2] = {&scratch.t, &scratch.x};
     for (uint32_t k = 0; k < 2; ++k) {
         CommandList list;
         list.clear(1.0);
@@ -66,13 +72,14 @@ PairSample samplePair(DepthBackend& backend, const std::array<Vec3f, 3>& t, cons
         list.depthFunc(DepthFunc::Always);
         list.draw(k, 1);
         backend.execute(list);
-        img[k] = backend.readDepth();
+        backend.readDepthInto(*img[k]);
     }
     // The cleared value: fitted views keep every fragment of a PCS triangle below it.
     CommandList clearOnly;
     clearOnly.clear(1.0);
     backend.execute(clearOnly);
-    const DepthImage blank = backend.readDepth();
+    backend.readDepthInto(scratch.blank);
+    const DepthImage& blank = scratch.blank;
     const uint32_t cleared = blank.values.empty() ? 0 : blank.at(0, 0);
 
     Vec3d wt[3], wx[3];
@@ -91,9 +98,9 @@ PairSample samplePair(DepthBackend& backend, const std::array<Vec3f, 3>& t, cons
     };
     s.largeT = large(t), s.largeX = large(x);
     s.maxDiffSteps = -std::numeric_limits<double>::infinity();
-    for (int yy = 0; yy < img[0].height; ++yy)
-        for (int xx = 0; xx < img[0].width; ++xx) {
-            const uint32_t a = img[0].at(xx, yy), b = img[1].at(xx, yy);
+    for (int yy = 0; yy < img[0]->height; ++yy)
+        for (int xx = 0; xx < img[0]->width; ++xx) {
+            const uint32_t a = img[0]->at(xx, yy), b = img[1]->at(xx, yy);
             const bool inT = a != cleared, inX = b != cleared;
             s.coveredT += inT;
             s.coveredX += inX;
@@ -103,8 +110,8 @@ PairSample samplePair(DepthBackend& backend, const std::array<Vec3f, 3>& t, cons
             const double cx = xx + 0.5, cy = yy + 0.5;
             // A plane the rasterizer built from snapped corners (unsnapped ones collinear): use
             // the stored depth instead, within half a step.
-            const double za = pt.valid ? pt.at(cx, cy) : img[0].depth(xx, yy);
-            const double zb = px.valid ? px.at(cx, cy) : img[1].depth(xx, yy);
+            const double za = pt.valid ? pt.at(cx, cy) : img[0]->depth(xx, yy);
+            const double zb = px.valid ? px.at(cx, cy) : img[1]->depth(xx, yy);
             s.maxDiffSteps = std::max(s.maxDiffSteps, (za - zb) / step);
         }
 
@@ -202,6 +209,7 @@ Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth,
         return std::array<Vec3f, 3>{m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]};
     };
     std::vector<int8_t> triangleCause(total, -1);
+    PairSampleScratch scratch;
     for (const oracle::IntersectingPair& p : truth.pairs) {
         const uint32_t ga = global(p.objectA, p.triangleA), gb = global(p.objectB, p.triangleB);
         const uint32_t c = std::min(prunedAt[ga], prunedAt[gb]);
@@ -217,7 +225,7 @@ Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth,
             } else {
                 const auto t = side == 0 ? corners(p.objectA, p.triangleA) : corners(p.objectB, p.triangleB);
                 const auto x = side == 0 ? corners(p.objectB, p.triangleB) : corners(p.objectA, p.triangleA);
-                ci = decide(options.method, samplePair(backend, t, x, views.at(c)));
+                ci = decide(options.method, samplePair(backend, t, x, views.at(c), scratch));
             }
             cause = first ? ci : worst(cause, ci);
             first = false;

@@ -132,9 +132,10 @@ std::vector<nlohmann::ordered_json> penetrationSweep(const ProbeOptions& po, con
                     const Mesh a = s.worldMesh(0), b = s.worldMesh(1);
                     const std::array<Vec3f, 3> tb{b.positions[0], b.positions[1], b.positions[2]};
                     double sampled = -std::numeric_limits<double>::infinity();
+                    PairSampleScratch scratch;
                     for (const Triangle& ta : a.triangles) {
                         const PairSample ps = samplePair(
-                            *backend, tb, {a.positions[ta[0]], a.positions[ta[1]], a.positions[ta[2]]}, view);
+                            *backend, tb, {a.positions[ta[0]], a.positions[ta[1]], a.positions[ta[2]]}, view, scratch);
                         if (ps.shared) sampled = std::max(sampled, ps.maxDiffSteps);
                     }
                     nlohmann::ordered_json row;

@@ -167,6 +167,7 @@ public:
     // Runs `list` on the reference and keeps it, with its view and answers, until endFrame().
     std::vector<uint64_t> execute(const CommandList& list) override;
     DepthImage readDepth() override { return reference_.readDepth(); }
+    void readDepthInto(DepthImage& out) override { reference_.readDepthInto(out); }
 
     void setFrame(uint32_t frame) { frame_ = frame; }
     // Ends the frame: the intervals of the frame's lists, in order, then the lists to the writer;

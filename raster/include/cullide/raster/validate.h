@@ -134,6 +134,7 @@ public:
     void setView(const OrthoView& view) override;
     std::vector<uint64_t> execute(const CommandList& list) override;
     DepthImage readDepth() override;
+    void readDepthInto(DepthImage& out) override;
 
     void setFrame(uint32_t frame) { frame_ = frame, list_ = 0; }
     const std::vector<QueryComparison>& comparisons() const { return comparisons_; }

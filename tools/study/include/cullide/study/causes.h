@@ -53,9 +53,17 @@ struct PairSample {
     double reachSteps = 0;
 };
 
+// The images samplePair reads, kept by a caller that samples many pairs so that their buffers
+// are reused (DepthBackend::readDepthInto).
+struct PairSampleScratch {
+    DepthImage t, x, blank;
+};
+
 // Renders t and x alone in `view` on `backend` (which gets new geometry and view) and measures.
 PairSample samplePair(DepthBackend& backend, const std::array<Vec3f, 3>& t, const std::array<Vec3f, 3>& x,
                       const OrthoView& view);
+PairSample samplePair(DepthBackend& backend, const std::array<Vec3f, 3>& t, const std::array<Vec3f, 3>& x,
+                      const OrthoView& view, PairSampleScratch& scratch);
 
 // The cause of a miss of T against X (T dropped while X was drawn), given their sample:
 //   EdgeOn when either covers no centre although large enough to cover one face-on; Sampling
