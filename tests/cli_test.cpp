@@ -756,8 +756,11 @@ TEST(Cli, ReportRendersInChromium) {
     const ReportRun& run = smallReport();
     ASSERT_EQ(run.report.status, 0) << run.study.output << run.report.output;
     const fs::path page = run.dir / "page" / "report.html", shot = run.dir / "shot.png";
+    // A profile of its own: none written to $HOME, no lock shared with another Chromium.
     const std::string browser =
-        "timeout 300 chromium --headless --no-sandbox --disable-gpu --hide-scrollbars --window-size=1200,2400 ";
+        "timeout 300 chromium --headless --no-sandbox --disable-gpu --hide-scrollbars "
+        "--window-size=1200,2400 --user-data-dir=" +
+        quote((run.dir / "chromium-profile").string()) + " ";
     const std::string url = quote("file://" + page.string());
     const CliRun dom = cullide::test::runCommand("( " + browser + "--dump-dom " + url + " 2>/dev/null )");
     ASSERT_EQ(dom.status, 0) << dom.output;
