@@ -25,6 +25,8 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
   # charts
   python3 python3-matplotlib python3-numpy
+  # headless Chromium: the test that `cullide report`'s page renders (Cli.ReportRendersInChromium)
+  chromium
   # the Python module (python/) and its tests
   pybind11-dev python3-dev python3-pytest
   # the README's Slurm recipe, run by tools/cluster/slurm-smoke.sh on a private single-node cluster

@@ -16,8 +16,8 @@ cd "$(dirname "$0")/.."
 bash tools/setup.sh
 jobs=$(nproc)
 # setup.sh installs Mesa's EGL (llvmpipe) and Vulkan (lavapipe, validation layers), so the GL and
-# Vulkan tests must run here, not skip.
-export CULLIDE_REQUIRE_GL=1 CULLIDE_REQUIRE_VULKAN=1
+# Vulkan tests must run here, not skip; and Chromium, so the report's render test must too.
+export CULLIDE_REQUIRE_GL=1 CULLIDE_REQUIRE_VULKAN=1 CULLIDE_REQUIRE_CHROMIUM=1
 
 run_suite() {  # preset name, build dir, extra configure arguments
   echo "== test.sh: configure and build ($1) in $2"

@@ -15,6 +15,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace cullide::cli {
 
@@ -46,6 +47,18 @@ void checkCullideOptions(const CLI::App* sub, const OptionText& text);
 // InputError("option --progress") while parsing (exit status 2).
 void addProgressOption(CLI::App* sub, study::ProgressMode& mode);
 
+// The command line this process runs, as a POSIX shell reads it back: argv[0] as "cullide" (its
+// basename: no machine path in the outputs), each other argument quoted where the shell would
+// split or expand it. main() sets it before parsing; `study` records it in each record ("command").
+void setCommandLine(int argc, char** argv);
+const std::string& commandLine();
+
+// Runs tools/plot.py (the plot command's script: $CULLIDE_PLOT_SCRIPT or the resource root's) with
+// `scriptArgs` under `python` (empty: $CULLIDE_PYTHON, else /usr/bin/python3); returns its exit
+// status. InputError when the script or one of `inputs` does not exist, before anything runs.
+int runPlotScript(const std::vector<std::string>& inputs, const std::vector<std::string>& scriptArgs,
+                  const std::string& python);
+
 void addInfoCommand(CLI::App& app, Action& action);
 void addMakeSceneCommand(CLI::App& app, Action& action);
 void addPruneCommand(CLI::App& app, Action& action);
@@ -54,5 +67,6 @@ void addOracleCommand(CLI::App& app, Action& action);
 void addStudyCommand(CLI::App& app, Action& action);
 void addPlotCommand(CLI::App& app, Action& action);
 void addTraceCommand(CLI::App& app, Action& action);
+void addReportCommand(CLI::App& app, Action& action);
 
 }  // namespace cullide::cli

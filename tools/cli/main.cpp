@@ -11,6 +11,40 @@
 #endif
 #include <exception>
 
+namespace cullide::cli {
+namespace {
+std::string gCommandLine;
+}  // namespace
+
+void setCommandLine(int argc, char** argv) {
+    gCommandLine = "cullide";
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        const bool plain = !a.empty() &&
+            a.find_first_not_of(
+                "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                "0123456789_-+=.,/:@%") == std::string::npos;
+        gCommandLine += ' ';
+        if (plain) {
+            gCommandLine += a;
+            continue;
+        }
+        // Single quotes keep everything but a single quote, which closes, is escaped, and reopens.
+        gCommandLine += '\'';
+        for (char c : a) {
+            if (c == '\'') gCommandLine += "'\\''";
+            else gCommandLine += c;
+        }
+        gCommandLine += '\'';
+    }
+}
+
+const std::string& commandLine() {
+    return gCommandLine;
+}
+
+}  // namespace cullide::cli
+
 namespace {
 
 int run(int argc, char** argv) {
@@ -22,6 +56,7 @@ int run(int argc, char** argv) {
                          std::string("cullide ") + cullide::version() + " (commit " + cullide::gitCommit() + "; " +
                              cullide::oracle::libraryVersions() + ")");
 
+    cullide::cli::setCommandLine(argc, argv);
     cullide::cli::Action action;
     cullide::cli::addInfoCommand(app, action);
     cullide::cli::addMakeSceneCommand(app, action);
@@ -31,6 +66,7 @@ int run(int argc, char** argv) {
     cullide::cli::addStudyCommand(app, action);
     cullide::cli::addPlotCommand(app, action);
     cullide::cli::addTraceCommand(app, action);
+    cullide::cli::addReportCommand(app, action);
 
     try {
         app.parse(argc, argv);

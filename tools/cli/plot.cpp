@@ -17,6 +17,7 @@ namespace {
 struct PlotOptions {
     std::vector<std::string> inputs;
     std::string out = "figures";
+    std::string method;
     std::string python;
 };
 
@@ -28,14 +29,24 @@ std::filesystem::path plotScript() {
 }
 
 int runPlot(const PlotOptions& o) {
+    std::vector<std::string> args{"-o", o.out};
+    if (!o.method.empty()) args.insert(args.end(), {"--method", o.method});
+    args.insert(args.end(), o.inputs.begin(), o.inputs.end());
+    return runPlotScript(o.inputs, args, o.python);
+}
+
+}  // namespace
+
+int runPlotScript(const std::vector<std::string>& inputs, const std::vector<std::string>& scriptArgs,
+                  const std::string& pythonOption) {
     const std::filesystem::path script = plotScript();
     if (!std::filesystem::exists(script)) throw InputError("plot", "cannot find the plot script " + script.string());
-    for (const std::string& in : o.inputs)
+    for (const std::string& in : inputs)
         if (!std::filesystem::exists(in)) throw InputError(in, "no such file");
-    std::string python = o.python;
+    std::string python = pythonOption;
     if (python.empty()) python = std::getenv("CULLIDE_PYTHON") ? std::getenv("CULLIDE_PYTHON") : "/usr/bin/python3";
-    std::vector<std::string> args{python, script.string(), "-o", o.out};
-    args.insert(args.end(), o.inputs.begin(), o.inputs.end());
+    std::vector<std::string> args{python, script.string()};
+    args.insert(args.end(), scriptArgs.begin(), scriptArgs.end());
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -53,8 +64,6 @@ int runPlot(const PlotOptions& o) {
     return WIFEXITED(status) ? WEXITSTATUS(status) : 2;
 }
 
-}  // namespace
-
 void addPlotCommand(CLI::App& app, Action& action) {
     auto o = std::make_shared<PlotOptions>();
     CLI::App* sub = app.add_subcommand(
@@ -62,6 +71,9 @@ void addPlotCommand(CLI::App& app, Action& action) {
     sub->add_option("inputs", o->inputs, "study .csv/.jsonl, stability .csv, prune --json .json, cullide_bench JSON")
         ->required();
     sub->add_option("-o,--out", o->out, "Folder for the charts")->capture_default_str();
+    sub->add_option("--method", o->method,
+                    "Method of the per-call charts (Figures 9-11) of a study (default: modified, else the first "
+                    "method with several calls)");
     sub->add_option("--python", o->python, "Python with matplotlib (default $CULLIDE_PYTHON or /usr/bin/python3)");
     sub->callback([o, &action] { action = [o] { return runPlot(*o); }; });
 }

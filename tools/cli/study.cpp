@@ -128,6 +128,7 @@ int runStudyCommand(const StudyCliOptions& o) {
                      "cullide: warning: threads apply to the cpu backend only; the gl and vulkan runs ignore them\n");
     if (!o.shard.empty()) so.shard = study::parseShard(o.shard);
     so.out = o.out;
+    so.command = commandLine();
     so.progress = o.quiet ? study::ProgressMode::Never : o.progress;
     size_t unexplained = 0;
     so.onRecord = [&](const nlohmann::ordered_json& r) {

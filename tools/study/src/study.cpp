@@ -468,7 +468,8 @@ size_t runStudy(const StudyOptions& opt) {
         }
         auto& backend = backends[{c.backend, c.threads}];
         if (!backend) backend = raster::makeBackend(c.backend, c.threads);
-        const nlohmann::ordered_json r = runOne(c, scene, truth.get(), opt.spec.repeats, *backend);
+        nlohmann::ordered_json r = runOne(c, scene, truth.get(), opt.spec.repeats, *backend);
+        if (!opt.command.empty()) r["command"] = opt.command;
         csv << csvRow(r) << std::flush;
         jsonl << r.dump() << "\n" << std::flush;
         if (opt.onRecord) {

@@ -11,11 +11,12 @@
 //   - Scenes: "bunny:N" (the deformed bunny, make-scene bunny), "cows:N" (two cows), "cylinders:N"
 //     or "cylinders:N:C", "twist:N" (a twisted bunny); or a scene/mesh file; "@K" picks frame K
 //     of a file's animation, "@all" (the default for files) every frame.
-//   - Records are flat JSON objects (plus a "passes" array of per-call stats and a "provenance"
-//     object, cullide/provenance.h); the CSV holds the flat columns of kColumns, in that order.
-//     Columns ending in "_ms" (and the passes' seconds) are timings; they and the provenance (its
-//     date, and the machine of a shard) may differ between runs: everything else is a pure
-//     function of the configuration.
+//   - Records are flat JSON objects (plus a "passes" array of per-call stats, a "provenance"
+//     object, cullide/provenance.h, and the "command" that ran the sweep, when known); the CSV
+//     holds the flat columns of kColumns, in that order. Columns ending in "_ms" (and the passes'
+//     seconds) are timings; they, the provenance (its date, and the machine of a shard) and the
+//     command (a shard's --shard) may differ between runs: everything else is a pure function of
+//     the configuration.
 //   - Errors: InputError naming the spec field, option or file.
 #pragma once
 
@@ -133,6 +134,10 @@ struct StudyOptions {
     std::filesystem::path out;  // .csv or .jsonl
     ProgressMode progress = ProgressMode::Never;  // the bar with ETA on stderr (progress.h)
     std::function<void(const nlohmann::ordered_json&)> onRecord;  // after each run
+    // The command line that asked for the sweep (`cullide study ...`); when not empty, each record
+    // carries it as "command" (JSON lines only, not a CSV column), so a report can show how the
+    // data were made. Like the provenance, it may differ between shards of one sweep.
+    std::string command;
 };
 // Runs the sweep (or its shard), appending to the output; runs whose id is already in the
 // output are skipped (resume). Returns the number of runs done now.
