@@ -191,12 +191,14 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     SetupParams params = in.params;
     params.dropEmpty = true;
     // The guess: what setupUnclipped gives a triangle whose vertices need no clipping (0 or 1
-    // record), 1 for the others (clipped ones with more spill).
+    // record), 1 for the others (clipped ones with more spill). For vertices inside the clip
+    // volume trivialReject adds nothing: they are finite with depths in [0, 1], and three beyond
+    // one side of the viewport snap to a box that holds no centre; so the count reads the snapped
+    // vertices only, not the window ones (it was ~10% of a prune's time as a second gather).
     auto countOne = [&](uint32_t t) -> uint32_t {
         const Triangle& tri = in.triangles[t];
         const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
         if (!(s0.inside && s1.inside && s2.inside)) return 1;
-        if (trivialReject(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]], params)) return 0;
         const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
         return snappedHasArea(sx, sy) && boxHoldsCentre(sx, sy, params) ? 1 : 0;
     };
