@@ -22,6 +22,16 @@ namespace cullide::cli {
 // A subcommand's action, run after parsing; returns the process exit status.
 using Action = std::function<int()>;
 
+// For the commands whose peak memory is a promise (oracle, trace record and replay): a fixed
+// glibc mmap threshold of 128 KiB. glibc otherwise raises the threshold to the size of each large
+// block freed (up to 32 MB), so that later large buffers come from the heap, where freed ones
+// stay resident: oracle on a 1M-triangle bunny peaks at 165 MB instead of 140, trace record of a
+// 270k bunny of 9 frames (pipeline and interval evaluator take turns) at 85 MB instead of 64.
+// The price is a fresh mapping, and its page faults, for every large block: not for commands that
+// allocate and free large buffers over and over (study: 120k page faults instead of 16k, 20-40%
+// of its time; prune of 9 frames: 25% more CPU), which keep glibc's default.
+void preferSmallFootprint();
+
 // The frames [first, last) a --frame value selects (frame < 0: every frame). Throws
 // InputError("option --frame") when `animation`, read from `path`, has no such frame.
 struct FrameRange {

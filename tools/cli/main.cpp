@@ -43,6 +43,12 @@ const std::string& commandLine() {
     return gCommandLine;
 }
 
+void preferSmallFootprint() {
+#if defined(__GLIBC__)
+    mallopt(M_MMAP_THRESHOLD, 128 * 1024);
+#endif
+}
+
 }  // namespace cullide::cli
 
 namespace {
@@ -103,14 +109,6 @@ int run(int argc, char** argv) {
 // The last resort: anything else that escapes a command is a bug in cullide, reported as one
 // with its own exit status (70, EX_SOFTWARE), never an abort.
 int main(int argc, char** argv) {
-#if defined(__GLIBC__)
-    // A fixed mmap threshold: glibc otherwise raises it to the size of each large block freed (up
-    // to 32 MB), so that later large buffers come from the heap, where freed ones stay resident
-    // (oracle, 1M-triangle bunny: 164 -> 140 MB peak; trace record, 270k bunny of 9 frames, whose
-    // pipeline and interval evaluator take turns: -3 MB). Every block over 128 KiB is then mapped
-    // on its own and returned on free.
-    mallopt(M_MMAP_THRESHOLD, 128 * 1024);
-#endif
     try {
         return run(argc, argv);
     } catch (const cullide::InputError& e) {  // from an option's check while parsing

@@ -37,6 +37,7 @@ struct OracleCommandOptions {
 };
 
 int runOracle(const OracleCommandOptions& o) {
+    preferSmallFootprint();  // its peak memory is a promise (commands.h)
     std::optional<tbb::global_control> limit;
     if (o.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
     const Animation animation = loadScene(o.scene);

@@ -237,6 +237,7 @@ struct RecordOptions {
 };
 
 int runRecord(const RecordOptions& o) {
+    preferSmallFootprint();  // its peak memory is a promise (commands.h)
     const CullideOptions options = parseCullideOptions(o.cullide);
     const Animation animation = loadScene(o.scene);
     const auto [first, last] = selectFrames(animation, o.frame, o.scene);
@@ -271,6 +272,7 @@ struct ReplayOptions {
 };
 
 int runReplay(const ReplayOptions& o) {
+    preferSmallFootprint();  // its peak memory is a promise (commands.h)
     const raster::TraceReader trace(o.trace);
     std::unique_ptr<DepthBackend> backend;
     std::vector<std::string> drivers;
