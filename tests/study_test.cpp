@@ -376,7 +376,9 @@ TEST(StudyCli, PlotDrawsPerCallChartsOfTheMethodAskedFor) {
               0)
         << out;
     for (const auto& r : readRecords(dir / "s.csv"))
-        if (r["method"] == "original") ASSERT_EQ(r["calls"], 1) << "the trap needs a one-call run";
+        if (r["method"] == "original") {
+            ASSERT_EQ(r["calls"], 1) << "the trap needs a one-call run";
+        }
     EXPECT_EQ(runCli("plot " + (dir / "s.csv").string() + " --method original -o " + (dir / "a").string(), &out), 0)
         << out;
     EXPECT_NE(out.find("no run of method 'original' has several reducePCS calls"), std::string::npos) << out;
