@@ -6,7 +6,9 @@
 //     Figure 8: bunny 5k-270k in 20-600 ms, cows 3k-270k in 35-1000 ms on a 2003 GPU; docs/paper.md#figures-8-12).
 //     scene 0 = the deformed bunny (make-scene bunny), 1 = two cows merged into one object
 //     (make-scene cows); method 0 = original, 1 = modified. Counters: PCS triangles, reducePCS
-//     calls, triangles rendered, queries.
+//     calls, triangles rendered, queries, levels 0-2's time and triangle rate (the whole mesh
+//     drawn), and on the 270k modified runs on one thread x_90b80f8 (commit 90b80f8's CPU time
+//     over this run's).
 //   BM_Hierarchy/<kind>/<triangles>: building one object's hierarchy (the per-frame cost the
 //     paper's method pays instead of preprocessing); kind 0 = connectivity, 1 = random. Counter
 //     x_90b80f8 (connectivity): the CPU time of commit 90b80f8's build over this run's (see
@@ -20,6 +22,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <array>
 #include <ctime>
 #include <map>
 #include <utility>
@@ -27,6 +30,24 @@
 namespace {
 
 using namespace cullide;
+
+// This thread's CPU time in ms. On one thread the backend's arena and the hierarchy build run on
+// the calling thread, so this is the run's whole work, and a run descheduled on the shared build
+// machine does not look slower than it is.
+double threadCpuMs() {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return 1e3 * double(t.tv_sec) + 1e-6 * double(t.tv_nsec);
+}
+
+// Commit 90b80f8's BM_Prune CPU time per run (ms, one thread) on the 270k scenes, modified
+// method, by (scene, tris, method): that commit's own cullide_bench with
+// --benchmark_repetitions=5, the least CPU column, in the same A/B run as this one's figure (the
+// closing note of issue 16); x_90b80f8 = that over this run's CPU time per run.
+constexpr std::pair<std::array<int64_t, 3>, double> kPruneCpuMs90b80f8[] = {
+    {{0, 270000, 1}, 1011},
+    {{1, 270000, 1}, 1294},
+};
 
 void BM_Prune(benchmark::State& state) {
     const Scene& scene = paperScene(int(state.range(0)), size_t(state.range(1)));
@@ -36,15 +57,28 @@ void BM_Prune(benchmark::State& state) {
     CullideOptions o;
     o.method = state.range(2) == 0 ? CullMethod::Original : CullMethod::Modified;
     CullideResult r;
+    const double cpuBegin = threadCpuMs();
     for (auto _ : state) r = runCullide(scene, *backend, o);
-    size_t rendered = 0, queries = 0;
-    for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
+    const double cpuMs = (threadCpuMs() - cpuBegin) / double(state.iterations());
+    size_t rendered = 0, queries = 0, rendered012 = 0;
+    double seconds012 = 0;
+    for (const PassStats& p : r.passes) {
+        rendered += p.trianglesRendered, queries += p.queries;
+        if (p.level <= 2) rendered012 += p.trianglesRendered, seconds012 += p.seconds;
+    }
     state.counters["triangles"] = double(scene.triangleCount());
     state.counters["pcs"] = double(r.pcs.size());
     state.counters["calls"] = double(r.passes.size());
     state.counters["rendered"] = double(rendered);
     state.counters["queries"] = double(queries);
     state.counters["hier_ms"] = 1e3 * r.hierarchySeconds;
+    // Levels 0-2 draw (nearly) the whole mesh and prune almost nothing: the setup-bound part
+    // (the last iteration's calls; issue 16's row "levels 0-2").
+    state.counters["lv012_ms"] = 1e3 * seconds012;
+    state.counters["lv012_Mtri/s"] = seconds012 > 0 ? 1e-6 * double(rendered012) / seconds012 : 0;
+    for (const auto& [args, oldMs] : kPruneCpuMs90b80f8)
+        if (args == std::array<int64_t, 3>{state.range(0), state.range(1), state.range(2)} && bo.threads == 1)
+            state.counters["x_90b80f8"] = oldMs / cpuMs;
 }
 BENCHMARK(BM_Prune)
     ->ArgNames({"scene", "tris", "method", "threads"})
@@ -69,14 +103,9 @@ void BM_Hierarchy(benchmark::State& state) {
     const Mesh& mesh = scene.objects[0].mesh;
     // Thread CPU time, not wall time: the build machine is shared, and a build descheduled for a
     // while would otherwise look slower than it is.
-    auto threadMs = [] {
-        timespec t{};
-        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-        return 1e3 * double(t.tv_sec) + 1e-6 * double(t.tv_nsec);
-    };
-    const double begin = threadMs();
+    const double begin = threadCpuMs();
     for (auto _ : state) benchmark::DoNotOptimize(buildHierarchy(mesh, o));
-    const double ms = (threadMs() - begin) / double(state.iterations());
+    const double ms = (threadCpuMs() - begin) / double(state.iterations());
     state.counters["Mtri/s"] =
         benchmark::Counter(double(mesh.triangleCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
     for (const auto& [triangles, oldMs] : kConnectivityMs90b80f8)
