@@ -238,12 +238,25 @@ private:
         positions_.reserve(vertices);
         triangles_.clear();
         triangles_.reserve(triangles);
+        // Each object's vertices are renumbered in the order its triangles, in hierarchy order,
+        // first use them (unused ones dropped): a node's triangles then read nearby vertices, so
+        // every pass over a draw (its view's fit, setup's gathers) stays in cache. Only indices
+        // change, and which triangles share a vertex does not: the same images and PCS.
+        std::vector<uint32_t> renumber;
         for (size_t i = 0; i < n; ++i) {
-            const uint32_t base = uint32_t(positions_.size());
-            positions_.insert(positions_.end(), world[i].positions.begin(), world[i].positions.end());
+            renumber.assign(world[i].positions.size(), UINT32_MAX);
             for (uint32_t t : hierarchies_[i]->order) {
                 const Triangle& tri = world[i].triangles[t];
-                triangles_.push_back({tri[0] + base, tri[1] + base, tri[2] + base});
+                Triangle out;
+                for (int k = 0; k < 3; ++k) {
+                    uint32_t& v = renumber[tri[k]];
+                    if (v == UINT32_MAX) {
+                        v = uint32_t(positions_.size());
+                        positions_.push_back(world[i].positions[tri[k]]);
+                    }
+                    out[k] = v;
+                }
+                triangles_.push_back(out);
             }
         }
         world = {};
