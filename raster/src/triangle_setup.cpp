@@ -129,12 +129,28 @@ bool insideClipVolume(const WinVertex& v, const SetupParams& params) {
     return v.z >= 0 && v.z <= 1 && v.x >= -G && v.x <= G && v.y >= -G && v.y <= G;
 }
 
+namespace {
+
+// Smallest and largest of three, as selects: std::min of an initializer list compiled to
+// compare-and-branch chains here, whose mispredictions were most of boxHoldsCentre's time
+// (~13% of a prune); these give conditional moves (5-8% off a 270k prune).
+inline int64_t min3(int64_t a, int64_t b, int64_t c) {
+    const int64_t ab = a < b ? a : b;
+    return ab < c ? ab : c;
+}
+inline int64_t max3(int64_t a, int64_t b, int64_t c) {
+    const int64_t ab = a > b ? a : b;
+    return ab > c ? ab : c;
+}
+
+}  // namespace
+
 bool boxHoldsCentre(const int64_t sx[3], const int64_t sy[3], const SetupParams& params) {
     // A centre i*2^S + half within [min, max] in x and in y, inside the viewport.
     const int S = params.subpixelBits;
     const int64_t half = int64_t(1) << (S - 1);
-    const int64_t minx = std::min({sx[0], sx[1], sx[2]}), maxx = std::max({sx[0], sx[1], sx[2]});
-    const int64_t miny = std::min({sy[0], sy[1], sy[2]}), maxy = std::max({sy[0], sy[1], sy[2]});
+    const int64_t minx = min3(sx[0], sx[1], sx[2]), maxx = max3(sx[0], sx[1], sx[2]);
+    const int64_t miny = min3(sy[0], sy[1], sy[2]), maxy = max3(sy[0], sy[1], sy[2]);
     const int64_t lox = std::max<int64_t>(-((half - minx) >> S), 0);
     const int64_t hix = std::min<int64_t>((maxx - half) >> S, params.width - 1);
     const int64_t loy = std::max<int64_t>(-((half - miny) >> S), 0);
@@ -200,8 +216,8 @@ bool makeEdgeTri(const SnappedTri& t, const SetupParams& params, EdgeTri& out) {
     const int S = params.subpixelBits;
     const int64_t one = int64_t(1) << S, half = one >> 1;
     // Bounding box of the covered centres: centre i*2^S + half within [min, max].
-    const int64_t minx = std::min({t.x[0], t.x[1], t.x[2]}), maxx = std::max({t.x[0], t.x[1], t.x[2]});
-    const int64_t miny = std::min({t.y[0], t.y[1], t.y[2]}), maxy = std::max({t.y[0], t.y[1], t.y[2]});
+    const int64_t minx = min3(t.x[0], t.x[1], t.x[2]), maxx = max3(t.x[0], t.x[1], t.x[2]);
+    const int64_t miny = min3(t.y[0], t.y[1], t.y[2]), maxy = max3(t.y[0], t.y[1], t.y[2]);
     const int64_t i0 = std::max<int64_t>(ceilShift(minx - half, S), 0);
     const int64_t i1 = std::min<int64_t>(floorShift(maxx - half, S), params.width - 1);
     const int64_t j0 = std::max<int64_t>(ceilShift(miny - half, S), 0);
