@@ -5,10 +5,11 @@
 //     reducePCS call (six axis directions, 500 x 500, D24), as the paper measures it (its
 //     Figure 8: bunny 5k-270k in 20-600 ms, cows 3k-270k in 35-1000 ms on a 2003 GPU; docs/paper.md#figures-8-12).
 //     scene 0 = the deformed bunny (make-scene bunny), 1 = two cows merged into one object
-//     (make-scene cows); method 0 = original, 1 = modified. Counters: PCS triangles, reducePCS
-//     calls, triangles rendered, queries, levels 0-2's time and triangle rate (the whole mesh
-//     drawn), and on the 270k modified runs on one thread x_90b80f8 (commit 90b80f8's CPU time
-//     over this run's).
+//     (make-scene cows); method 0 = original, 1 = modified, 2 = modified with adaptive
+//     resolution (`--resolution auto`, docs/cullide.md#adaptive-resolution). Counters: PCS
+//     triangles, reducePCS calls, triangles rendered, queries, levels 0-2's time and triangle
+//     rate (the whole mesh drawn), and on the 270k modified runs on one thread x_90b80f8 (commit
+//     90b80f8's CPU time over this run's).
 //   BM_Hierarchy/<kind>/<triangles>: building one object's hierarchy (the per-frame cost the
 //     paper's method pays instead of preprocessing); kind 0 = connectivity, 1 = random. Counter
 //     x_90b80f8 (connectivity): the CPU time of commit 90b80f8's build over this run's (see
@@ -56,6 +57,7 @@ void BM_Prune(benchmark::State& state) {
     auto backend = raster::makeCpuBackend(bo);
     CullideOptions o;
     o.method = state.range(2) == 0 ? CullMethod::Original : CullMethod::Modified;
+    if (state.range(2) == 2) o.autoCoverage = kDefaultAutoCoverage;
     CullideResult r;
     const double cpuBegin = threadCpuMs();
     for (auto _ : state) r = runCullide(scene, *backend, o);
@@ -82,7 +84,7 @@ void BM_Prune(benchmark::State& state) {
 }
 BENCHMARK(BM_Prune)
     ->ArgNames({"scene", "tris", "method", "threads"})
-    ->ArgsProduct({{0, 1}, {5000, 270000}, {0, 1}, {1, 2}})
+    ->ArgsProduct({{0, 1}, {5000, 270000}, {0, 1, 2}, {1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

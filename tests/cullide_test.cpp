@@ -126,13 +126,15 @@ std::set<PcsTriangle> crossingTriangles(const Scene& scene) {
 }
 
 CullideResult prune(const Scene& scene, CullMethod method, uint32_t leafSize,
-                    HierarchyKind kind = HierarchyKind::Connectivity, int threads = 0, int resolution = 256) {
+                    HierarchyKind kind = HierarchyKind::Connectivity, int threads = 0, int resolution = 256,
+                    double autoCoverage = 0) {
     raster::CpuBackendOptions bo;
     bo.threads = threads;
     auto backend = raster::makeCpuBackend(bo);
     CullideOptions o;
     o.method = method;
     o.width = o.height = resolution;
+    o.autoCoverage = autoCoverage;
     o.hierarchy.kind = kind;
     o.hierarchy.leafSize = leafSize;
     o.hierarchy.branching = 2;
@@ -177,11 +179,12 @@ struct TouchOutcome {
 };
 
 TouchOutcome pruneTouching(const Scene& s, CullMethod method, int resolution, DepthFormat depth, uint32_t leafSize,
-                           std::vector<Vec3d> directions = axisDirections()) {
+                           std::vector<Vec3d> directions = axisDirections(), double autoCoverage = 0) {
     auto backend = raster::makeCpuBackend();
     CullideOptions o;
     o.method = method;
     o.width = o.height = resolution;
+    o.autoCoverage = autoCoverage;
     o.depth = depth;
     o.hierarchy.leafSize = leafSize;
     o.directions = std::move(directions);
@@ -211,19 +214,21 @@ TEST(Cullide, SeparatedBoxesArePruned) {
 }
 
 // Two interpenetrating boxes, generic orientation: the PCS holds every crossing triangle, for
-// both methods and both hierarchies (the hierarchy changes speed, not what may be pruned).
+// both methods and both hierarchies (the hierarchy changes speed, not what may be pruned), at a
+// fixed resolution and with adaptive resolution (each call its own viewport).
 TEST(Cullide, InterpenetratingBoxesKeepCrossingTriangles) {
     const Scene s = sceneOf({{box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), rotation(0.3, 0.5, 0.7)},
                              {box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), rotation(0.9, 0.2, 0.4, Vec3f(0.5, 0.4, 0.3))}});
     const std::set<PcsTriangle> truth = crossingTriangles(s);
     ASSERT_GE(truth.size(), 4u);
     for (CullMethod m : {CullMethod::Original, CullMethod::Modified})
-        for (HierarchyKind k : {HierarchyKind::Connectivity, HierarchyKind::Random}) {
-            const CullideResult r = prune(s, m, 1, k);
-            EXPECT_TRUE(contains(r, truth))
-                << toString(m) << "/" << toString(k) << ": PCS " << r.pcs.size() << ", crossing " << truth.size();
-            EXPECT_LT(r.pcs.size(), 24u) << "something was pruned at all";
-        }
+        for (HierarchyKind k : {HierarchyKind::Connectivity, HierarchyKind::Random})
+            for (double adaptive : {0.0, 1.0, 4.0}) {
+                const CullideResult r = prune(s, m, 1, k, 0, 256, adaptive);
+                EXPECT_TRUE(contains(r, truth)) << toString(m) << "/" << toString(k) << " auto " << adaptive << ": PCS "
+                                                << r.pcs.size() << ", crossing " << truth.size();
+                EXPECT_LT(r.pcs.size(), 24u) << "something was pruned at all";
+            }
 }
 
 // Trap: runCullide(Scene&&) (trace recording gives up each frame's scene to save memory)
@@ -397,6 +402,11 @@ TEST_P(CullideTouching, ReliableKeepsEveryTouchingPairCoarseAndFine) {
     EXPECT_EQ(f.pcs, 24u) << fine;
     EXPECT_EQ(pruneTouching(s, CullMethod::Original, fine, DepthFormat::float32(), 16, {Vec3d(0, 0, 1)}).lost, c.pairs)
         << fine << ": the original loses them all in this view";
+    // Adaptive resolution (refitted views, rounds until one prunes nothing) keeps them too.
+    const TouchOutcome adaptive =
+        pruneTouching(s, CullMethod::Reliable, 16, DepthFormat::unorm(8), 1, axisDirections(), kDefaultAutoCoverage);
+    EXPECT_EQ(adaptive.lost, 0u);
+    EXPECT_EQ(adaptive.pcs, c.colliding);
 }
 
 INSTANTIATE_TEST_SUITE_P(Cubes, CullideTouching, ::testing::ValuesIn(kTouching),
@@ -464,6 +474,79 @@ TEST(Cullide, DeterministicAcrossThreadsAndRuns) {
     EXPECT_FALSE(one.pcs.empty());
 }
 
+// Trap: adaptive resolution that depends on the thread count (a median or a sum gathered in
+// whatever order the threads finish) would give a different view, hence a different PCS, per
+// thread count. Same scene with --resolution auto: the same PCS, per-call viewports and counts.
+TEST(Cullide, AdaptiveResolutionDeterministicAcrossThreads) {
+    const Scene s = sceneOf({{icosphere(3), rotation(0.2, 0.3, 0.1)},
+                             {icosphere(3), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))},
+                             {selfCrossingRibbon(81), rotation(0.31, 0.47, 0.23, Vec3f(0.5f, 0, 0))}});
+    const CullideResult one = prune(s, CullMethod::Modified, 8, HierarchyKind::Connectivity, 1, 64, 4);
+    for (int threads : {2, 4}) {
+        const CullideResult r = prune(s, CullMethod::Modified, 8, HierarchyKind::Connectivity, threads, 64, 4);
+        EXPECT_EQ(r.pcs, one.pcs) << threads << " threads";
+        ASSERT_EQ(r.passes.size(), one.passes.size());
+        for (size_t i = 0; i < r.passes.size(); ++i) {
+            EXPECT_EQ(r.passes[i].width, one.passes[i].width) << i;
+            EXPECT_EQ(r.passes[i].height, one.passes[i].height) << i;
+            EXPECT_EQ(r.passes[i].nodesOut, one.passes[i].nodesOut) << i;
+        }
+    }
+}
+
+// Trap: a per-call viewport that is not recorded (or recorded as the option's) makes the
+// statistics lie and the study's false-prune attribution refit the wrong view. A fixed run
+// records its viewport in every call; an adaptive run never goes below its base and refines the
+// calls on the small deep PCS (the 64x64 base is coarse for 2560 triangles). (Its crossings are
+// checked on the boxes of InterpenetratingBoxesKeepCrossingTriangles.)
+TEST(Cullide, AdaptiveResolutionRecordedPerCall) {
+    const Scene s = sceneOf(
+        {{icosphere(3), rotation(0.2, 0.3, 0.1)}, {icosphere(3), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))}});
+    const CullideResult fixed = prune(s, CullMethod::Modified, 4, HierarchyKind::Connectivity, 0, 64);
+    for (const PassStats& p : fixed.passes) {
+        EXPECT_EQ(p.width, 64);
+        EXPECT_EQ(p.height, 64);
+        EXPECT_EQ(p.round, 0u);
+    }
+    const CullideResult adaptive = prune(s, CullMethod::Modified, 4, HierarchyKind::Connectivity, 0, 64, 4);
+    int finer = 0;
+    for (const PassStats& p : adaptive.passes) {
+        EXPECT_TRUE(std::max(p.width, p.height) >= 64 || (p.width == 64 && p.height == 64))
+            << p.width << "x" << p.height;
+        EXPECT_LE(int64_t(p.width) * p.height, kDefaultAutoBudget);
+        finer += std::max(p.width, p.height) > 64;
+    }
+    EXPECT_GT(finer, 0) << "no call was refined";
+}
+
+// The size rule itself (cullide.h): no PCS or large triangles give the base viewport exactly
+// (so an adaptive run that never refines is the fixed run); small triangles a finer one in the
+// PCS's aspect; the pixel budget and the backend's side limit shrink it, never past 1.
+TEST(Cullide, AdaptiveViewportFollowsTheRule) {
+    const Mesh big = box(Vec3f(0, 0, 0), Vec3f(2, 1, 1));
+    const TriangleRange all{0, uint32_t(big.triangles.size())};
+    const Vec3d z(0, 0, 1);
+    EXPECT_EQ(adaptiveViewport(big.positions, big.triangles, {}, z, 4, 100, 80, kDefaultAutoBudget, kMaxViewportSide),
+              std::make_pair(100, 80));
+    // Seen along z the box covers 2 x 1 twice (front and back): 4 / 0.02^2 = 10000 pixels at the
+    // base pixel (2/100), fewer than 4 base viewports (4 * 8000): the call wants finer pixels.
+    const auto [w, h] =
+        adaptiveViewport(big.positions, big.triangles, {&all, 1}, z, 4, 100, 80, kDefaultAutoBudget, kMaxViewportSide);
+    // (The frame's right and up may be either of x and y.)
+    EXPECT_GT(std::max(w, h), 100);
+    EXPECT_NEAR(double(std::max(w, h)) / std::min(w, h), 2.0, 0.05) << "the PCS's aspect";
+    EXPECT_EQ(adaptiveViewport(big.positions, big.triangles, {&all, 1}, z, 0.5, 100, 80, kDefaultAutoBudget,
+                               kMaxViewportSide),
+              std::make_pair(100, 80))
+        << "coverage already above 0.5 base viewports";
+    const auto [bw, bh] = adaptiveViewport(big.positions, big.triangles, {&all, 1}, z, 1000, 100, 80, 20000, 16384);
+    EXPECT_LE(int64_t(bw) * bh, 20000);
+    EXPECT_GE(std::max(bw, bh), 100) << "a budget of the base's size or more never goes coarser than the base";
+    const auto [sw, sh] =
+        adaptiveViewport(big.positions, big.triangles, {&all, 1}, z, 1000, 100, 80, kDefaultAutoBudget, 150);
+    EXPECT_LE(std::max(sw, sh), 150);
+}
+
 // The view is fitted tightly: the PCS's projected bounds touch the viewport (square pixels), and
 // its depth extent maps inside (0, 1) with margins, never onto the cleared far value.
 TEST(Cullide, FitViewIsTight) {
@@ -522,5 +605,12 @@ TEST(Cullide, BadOptionsRefused) {
     EXPECT_THROW(runCullide(s, *backend, o), InputError);
     o = {};
     o.hierarchy.branching = 1;
+    EXPECT_THROW(runCullide(s, *backend, o), InputError);
+    o = {};
+    o.autoCoverage = -1;  // adaptive K must be positive
+    EXPECT_THROW(runCullide(s, *backend, o), InputError);
+    o = {};
+    o.autoCoverage = 4;
+    o.autoBudget = 499 * 500;  // a budget below the base viewport could go coarser than the base
     EXPECT_THROW(runCullide(s, *backend, o), InputError);
 }

@@ -38,6 +38,8 @@ TEST(Options, DefaultsAreCullideDefaults) {
     EXPECT_EQ(o.hierarchy.leafSize, d.hierarchy.leafSize);
     EXPECT_EQ(o.hierarchy.branching, d.hierarchy.branching);
     EXPECT_EQ(o.hierarchy.seed, d.hierarchy.seed);
+    EXPECT_EQ(o.autoCoverage, d.autoCoverage);
+    EXPECT_EQ(o.autoCoverage, 0.0) << "fixed resolution unless asked";
 }
 
 TEST(Options, EveryFieldIsParsed) {
@@ -75,6 +77,13 @@ TEST(Options, ErrorsNameTheFieldAsTyped) {
         {[](OptionText& t) { t.resolution = std::string("0"); }, "R: "},
         {[](OptionText& t) { t.resolution = "20000x10"; }, "R: "},
         {[](OptionText& t) { t.resolution = "axb"; }, "R: "},
+        {[](OptionText& t) { t.resolution = "auto:0"; }, "R: "},
+        {[](OptionText& t) { t.resolution = "auto:x"; }, "R: "},
+        {[](OptionText& t) { t.resolution = "auto:"; }, "R: "},
+        {[](OptionText& t) { t.resolution = "auto:-1"; }, "R: "},
+        {[](OptionText& t) { t.resolution = "auto:4x"; }, "R: "},
+        {[](OptionText& t) { t.resolution = "auto:5000"; }, "R: "},
+        {[](OptionText& t) { t.resolution = "autox"; }, "R: "},
         {[](OptionText& t) { t.depth = std::string("7"); }, "D: "},
         {[](OptionText& t) { t.depth = "33"; }, "D: "},
         {[](OptionText& t) { t.depth = "half"; }, "D: "},
@@ -99,6 +108,27 @@ TEST(Options, ErrorsNameTheFieldAsTyped) {
         EXPECT_EQ(m.find("option --"), std::string::npos) << m;
         EXPECT_EQ(m.find("depth format:"), std::string::npos) << m;
     }
+}
+
+// Trap: "auto" read as a viewport (sscanf of "auto" fails, but "auto:4" must not become 4x4), or
+// adaptive resolution changing the base viewport a fixed run would use. "auto" is the default K
+// on a 500x500 base; "auto:K" takes a decimal K.
+TEST(Options, AdaptiveResolution) {
+    OptionText t;
+    t.resolution = "auto";
+    CullideOptions o = parseCullideOptions(t);
+    EXPECT_EQ(o.autoCoverage, kDefaultAutoCoverage);
+    EXPECT_EQ(o.width, 500);
+    EXPECT_EQ(o.height, 500);
+    t.resolution = "auto:4";
+    EXPECT_EQ(parseCullideOptions(t).autoCoverage, 4.0);
+    t.resolution = "auto:2.5";
+    EXPECT_EQ(parseCullideOptions(t).autoCoverage, 2.5);
+    EXPECT_EQ(parseResolutionSetting("640x480").autoCoverage, 0.0);
+    EXPECT_EQ(parseResolutionSetting("640x480").width, 640);
+    const std::string m = messageOf([] { parseResolutionSetting("auto:0", "option --resolutions"); });
+    EXPECT_EQ(m.rfind("option --resolutions: ", 0), 0u) << m;
+    EXPECT_NE(m.find("auto:0"), std::string::npos) << m;
 }
 
 // The trap of issue 12: `prune --depth 7` named the option, `study --depths 7` did not. The same

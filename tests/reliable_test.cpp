@@ -79,7 +79,7 @@ struct Outcome {
 };
 
 Outcome reliable(const Scene& scene, int resolution, DepthFormat depth, uint32_t leafSize = 16,
-                 std::vector<Vec3d> directions = axisDirections(), int threads = 0) {
+                 std::vector<Vec3d> directions = axisDirections(), int threads = 0, double autoCoverage = 0) {
     raster::CpuBackendOptions bo;
     bo.threads = threads;
     auto backend = raster::makeCpuBackend(bo);
@@ -89,6 +89,7 @@ Outcome reliable(const Scene& scene, int resolution, DepthFormat depth, uint32_t
     o.depth = depth;
     o.hierarchy.leafSize = leafSize;
     o.directions = std::move(directions);
+    o.autoCoverage = autoCoverage;
     Outcome r;
     r.result = runCullide(scene, *backend, o);
     r.report = study::measurePcs(scene, oracle::findIntersections(scene), r.result.pcs, o);
@@ -405,6 +406,34 @@ TEST(ReliableAcceptance, ZeroFalsePrunesOnBundledScenes) {
     }
 }
 
+// Trap: refitted views and repeated rounds (adaptive resolution) losing a pair: each call must be
+// sound on its own PCS, whatever the PCS was shrunk to by the calls before. The acceptance scenes
+// and bundled frames with --resolution auto from coarse bases: zero false prunes; the rounds go
+// on until one prunes nothing (the last round's calls keep what they are given), and the PCS is
+// never larger than the fixed base's.
+TEST(ReliableAcceptance, ZeroFalsePrunesWithAdaptiveResolution) {
+    std::vector<SceneCase> scenes = acceptanceScenes();
+    const Animation a = loadScene(std::string(CULLIDE_DATA_DIR) + "/scenes/bunny_through_cow.json");
+    scenes.push_back({"bunny through cow, middle frame", a.sceneAt(a.frameCount() / 2)});
+    for (const SceneCase& c : scenes)
+        for (int base : {16, 64}) {
+            const Outcome r = reliable(c.scene, base, DepthFormat::unorm(16), 16, axisDirections(), 0, 4);
+            EXPECT_EQ(r.report.falsePruneCount(), 0u) << c.name << " base " << base << ": " << describe(r.report);
+            ASSERT_FALSE(r.result.passes.empty());
+            const uint32_t last = r.result.passes.back().round;
+            size_t lastIn = 0, lastOut = 0;
+            for (const PassStats& p : r.result.passes) {
+                EXPECT_GE(std::max(p.width, p.height), base) << c.name;
+                if (p.round == last) lastIn = std::max(lastIn, p.nodesIn), lastOut = p.nodesOut;
+            }
+            if (!r.result.pcs.empty()) {
+                EXPECT_EQ(lastIn, lastOut) << c.name << ": the last round pruned something";
+            }
+            const Outcome fixed = reliable(c.scene, base, DepthFormat::unorm(16));
+            EXPECT_LE(r.result.pcs.size(), fixed.result.pcs.size()) << c.name << " base " << base;
+        }
+}
+
 // Same scene and options: the same PCS and the same per-pass counts for 1, 2 and 4 threads.
 TEST(ReliableMethod, DeterministicAcrossThreads) {
     const Scene s = sceneOf({{sphere(10, 14), Transform::Identity()},
@@ -419,6 +448,17 @@ TEST(ReliableMethod, DeterministicAcrossThreads) {
             EXPECT_EQ(r.result.passes[i].nodesOut, one.result.passes[i].nodesOut);
     }
     EXPECT_EQ(one.report.falsePruneCount(), 0u) << describe(one.report);
+    // Adaptive resolution: the same rounds, viewports and PCS for every thread count.
+    const Outcome adaptiveOne = reliable(s, 32, DepthFormat::unorm(24), 8, axisDirections(), 1, 4);
+    for (int threads : {2, 4}) {
+        const Outcome r = reliable(s, 32, DepthFormat::unorm(24), 8, axisDirections(), threads, 4);
+        EXPECT_EQ(r.result.pcs, adaptiveOne.result.pcs) << threads;
+        ASSERT_EQ(r.result.passes.size(), adaptiveOne.result.passes.size());
+        for (size_t i = 0; i < r.result.passes.size(); ++i) {
+            EXPECT_EQ(r.result.passes[i].width, adaptiveOne.result.passes[i].width);
+            EXPECT_EQ(r.result.passes[i].round, adaptiveOne.result.passes[i].round);
+        }
+    }
 }
 
 }  // namespace

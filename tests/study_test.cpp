@@ -212,6 +212,32 @@ TEST(StudyCauses, NoUnexplainedFalsePrunesOnBundledAndGeneratedScenes) {
     EXPECT_GT(falsePrunes, 0u);  // the attribution was exercised
 }
 
+// Trap: the attribution refits each pruning call's view to find the cause of a false prune; with
+// adaptive resolution it must use the call's own viewport (PassStats), not the option's base, or
+// the refitted view is another one and false prunes come out unexplained. Every record's calls
+// carry their viewports, never below the base.
+TEST(StudyCauses, AdaptiveResolutionFalsePrunesAreExplained) {
+    Spec s;
+    s.scenes = {"bunny:3000", "cows:3000", "twist:3000"};
+    s.methods = {"modified"};
+    s.resolutions = {"auto:1", "auto"};
+    s.depths = {"16"};
+    s.repeats = 1;
+    test::TempDir dir;
+    StudyOptions o;
+    o.spec = s;
+    o.out = dir / "a.csv";
+    runStudy(o);
+    const auto records = readRecords(o.out);
+    ASSERT_EQ(records.size(), 6u);
+    for (const auto& r : records) {
+        EXPECT_EQ(r["fp_unexplained"], 0) << r["scene"] << " " << r["resolution"];
+        EXPECT_EQ(r["mp_unexplained"], 0) << r["scene"] << " " << r["resolution"];
+        ASSERT_FALSE(r["passes"].empty());
+        for (const auto& p : r["passes"]) EXPECT_GE(std::max(p["width"].get<int>(), p["height"].get<int>()), 500);
+    }
+}
+
 size_t sumOf(const std::vector<nlohmann::ordered_json>& rows, const char* key) {
     size_t n = 0;
     for (const auto& r : rows) n += r[key].get<size_t>();
@@ -346,10 +372,11 @@ TEST(StudyCli, StudyMergeAndPlotFromTheCommandLine) {
     if (std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") != 0) GTEST_SKIP() << "no matplotlib";
     {
         std::ofstream bench(dir / "bench.json");
-        bench << R"({"benchmarks": [)"
-                 R"({"name": "BM_Prune/scene:0/tris:5000", "run_type": "iteration", "real_time": 20.0, "time_unit": "ms"},)"
-                 R"({"name": "BM_Prune/scene:0/tris:270000", "run_type": "iteration", "real_time": 600.0,)"
-                 R"( "time_unit": "ms"}]})";
+        bench
+            << R"({"benchmarks": [)"
+               R"({"name": "BM_Prune/scene:0/tris:5000", "run_type": "iteration", "real_time": 20.0, "time_unit": "ms"},)"
+               R"({"name": "BM_Prune/scene:0/tris:270000", "run_type": "iteration", "real_time": 600.0,)"
+               R"( "time_unit": "ms"}]})";
     }
     EXPECT_EQ(runCli("plot " + (dir / "m.csv").string() + " " + (dir / "bench.json").string() + " -o " +
                          (dir / "fig").string(),

@@ -10,7 +10,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <tuple>
 
 namespace cullide {
 
@@ -76,6 +78,14 @@ void CullideOptions::validate() const {
         throw InputError("option --resolution",
                          "the viewport must be 1 to " + std::to_string(kMaxViewportSide) + " pixels per side, not " +
                              std::to_string(width) + "x" + std::to_string(height));
+    if (autoCoverage != 0 && !(autoCoverage > 0 && autoCoverage <= kMaxAutoCoverage))
+        throw InputError("option --resolution",
+                         "the adaptive resolution's K must be more than 0 and at most " +
+                             std::to_string(int(kMaxAutoCoverage)) + " pixels");
+    if (autoCoverage != 0 && autoBudget < int64_t(width) * height)
+        throw InputError("option --resolution",
+                         "the adaptive resolution's pixel budget (" + std::to_string(autoBudget) +
+                             ") is smaller than the base viewport");
     if (hierarchy.leafSize < 1) throw InputError("option --leaf-size", "the leaf size must be at least 1");
     if (hierarchy.branching < 2) throw InputError("option --branching", "the branching must be at least 2");
 }
@@ -150,6 +160,71 @@ OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> tr
     view.zfar = view.znear + range;
     if (view.zfar < hi.z() + margin * range) view.zfar = hi.z() + margin * range;
     return view;
+}
+
+std::pair<int, int> adaptiveViewport(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                                     std::span<const TriangleRange> ranges, const Vec3d& dir, double coverage,
+                                     int baseWidth, int baseHeight, int64_t budget, int maxSide) {
+    const OrthoView frame = OrthoView::looking(dir);
+    size_t n = 0;
+    for (const TriangleRange& r : ranges) n += r.count;
+    if (n == 0) return {baseWidth, baseHeight};
+    // The PCS's projected area (the sum of its triangles' areas in the view plane) and bounds, per
+    // piece of at most kPiece triangles and then in piece order: the pieces depend on the ranges
+    // only, so the sums do not depend on the thread count.
+    struct ProjectedBox {
+        double area, xlo, xhi, ylo, yhi;
+    };
+    constexpr uint32_t kPiece = 4096;
+    std::vector<TriangleRange> pieces;
+    for (const TriangleRange& r : ranges)
+        for (uint32_t k = 0; k < r.count; k += kPiece) pieces.push_back({r.first + k, std::min(kPiece, r.count - k)});
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    std::vector<ProjectedBox> perPiece(pieces.size(), ProjectedBox{0, inf, -inf, inf, -inf});
+    parallelFor(0, pieces.size(), 1, [&](const auto& block) {
+        for (size_t i = block.begin(); i != block.end(); ++i) {
+            ProjectedBox& b = perPiece[i];
+            for (uint32_t k = 0; k < pieces[i].count; ++k) {
+                const Triangle& t = triangles[pieces[i].first + k];
+                double x[3], y[3];
+                for (int c = 0; c < 3; ++c) {
+                    const Vec3d p = positions[t[c]].cast<double>();
+                    x[c] = frame.right.dot(p), y[c] = frame.up.dot(p);
+                    b.xlo = std::min(b.xlo, x[c]), b.xhi = std::max(b.xhi, x[c]);
+                    b.ylo = std::min(b.ylo, y[c]), b.yhi = std::max(b.yhi, y[c]);
+                }
+                b.area += 0.5 * std::abs((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]));
+            }
+        }
+    });
+    ProjectedBox all{0, inf, -inf, inf, -inf};
+    for (const ProjectedBox& b : perPiece) {
+        all.area += b.area;
+        all.xlo = std::min(all.xlo, b.xlo), all.xhi = std::max(all.xhi, b.xhi);
+        all.ylo = std::min(all.ylo, b.ylo), all.yhi = std::max(all.yhi, b.yhi);
+    }
+    const double ex = all.xhi - all.xlo, ey = all.yhi - all.ylo;
+    // The base's pixel (fitView's at the base viewport) and the wanted one: the PCS covers
+    // `coverage` base viewports' worth of pixels.
+    const double basePixel = std::max(ex / baseWidth, ey / baseHeight);
+    const double wanted = std::sqrt(all.area / (coverage * double(baseWidth) * double(baseHeight)));
+    if (!(basePixel > 0) || !(wanted < basePixel)) return {baseWidth, baseHeight};
+    // Sides covering the bounds at the wanted pixel, in double so that nothing overflows.
+    double w = std::max(1.0, std::ceil(ex / wanted)), h = std::max(1.0, std::ceil(ey / wanted));
+    if (w * h > double(budget)) {
+        const double f = std::sqrt(double(budget) / (w * h));
+        w = std::max(1.0, std::floor(w * f)), h = std::max(1.0, std::floor(h * f));
+    }
+    const double side = double(std::clamp(maxSide, 1, kMaxViewportSide));
+    if (w > side || h > side) {
+        const double f = side / std::max(w, h);
+        w = std::clamp(std::floor(w * f), 1.0, side), h = std::clamp(std::floor(h * f), 1.0, side);
+    }
+    // Rounding down to the budget or the side limit may have made the pixel the base's or coarser:
+    // then the base itself (the side limit aside, never coarser than the base).
+    if (std::max(ex / w, ey / h) >= basePixel && baseWidth <= side && baseHeight <= side)
+        return {baseWidth, baseHeight};
+    return {int(w), int(h)};
 }
 
 namespace {
@@ -310,8 +385,15 @@ private:
         exactHit_.assign(hierarchies_.size(), {});
         for (uint32_t i = 0; i < hierarchies_.size(); ++i) exactHit_[i].assign(hierarchies_[i]->nodes.size(), 0);
         for (size_t u = 0; u < pcs.size(); ++u) exactHit_[pcs[u].object][pcs[u].node] = hits[u];
-        for (uint32_t d = 0; d < opt_.directions.size() && !pcs.empty(); ++d)
-            pcs = reduceReliable(pcs, depth, d, result.passes);
+        // With adaptive resolution, rounds of calls until one prunes nothing: each round's views are
+        // refitted to the smaller PCS, so its pixels are finer. Every call is sound on its own
+        // (docs/reliable.md), so any number of them is.
+        for (round_ = 0;; ++round_) {
+            const size_t before = pcs.size();
+            for (uint32_t d = 0; d < opt_.directions.size() && !pcs.empty(); ++d)
+                pcs = reduceReliable(pcs, depth, d, result.passes);
+            if (opt_.autoCoverage <= 0 || pcs.empty() || pcs.size() == before) break;
+        }
         result.pcs = expand(pcs);
     }
 
@@ -327,8 +409,7 @@ private:
         const auto start = Clock::now();
         ranges_.clear();
         for (const Item& it : pcs) ranges_.push_back(it.range);
-        backend_.setView(
-            fitView(positions_, triangles_, ranges_, opt_.directions[d], opt_.width, opt_.height, opt_.depth));
+        setView(d);
         const uint32_t n = uint32_t(pcs.size());
         const detail::UnitGraph g = detail::unitAdjacency(triangles_, ranges_);
         const std::vector<uint32_t> colour = detail::distanceTwoColouring(g);
@@ -384,13 +465,23 @@ private:
         return finishCall(pcs, std::move(kept), level, d, Command::Op::DrawConservative, start, passes);
     }
 
+    // The view of a call in direction d on ranges_: fitted at the fixed viewport, or at the one
+    // adaptive resolution chooses for these triangles.
+    void setView(uint32_t d) {
+        int w = opt_.width, h = opt_.height;
+        if (opt_.autoCoverage > 0)
+            std::tie(w, h) = adaptiveViewport(positions_, triangles_, ranges_, opt_.directions[d], opt_.autoCoverage,
+                                              opt_.width, opt_.height, opt_.autoBudget, backend_.maxViewportSide());
+        view_ = fitView(positions_, triangles_, ranges_, opt_.directions[d], w, h, opt_.depth);
+        backend_.setView(view_);
+    }
+
     // One reducePCS call in direction d: returns the nodes that stay.
     std::vector<Item> reduce(const std::vector<Item>& pcs, uint32_t level, uint32_t d, std::vector<PassStats>& passes) {
         const auto start = Clock::now();
         ranges_.clear();
         for (const Item& it : pcs) ranges_.push_back(it.range);
-        backend_.setView(
-            fitView(positions_, triangles_, ranges_, opt_.directions[d], opt_.width, opt_.height, opt_.depth));
+        setView(d);
 
         list_.reset();
         // forwardQuery[i] / reverseQuery[i]: the query numbers of PCS item i in each pass.
@@ -448,6 +539,8 @@ private:
         for (const Command& c : list_.commands())
             if (c.op == drawOp) st.trianglesRendered += c.count;
         st.queries = list_.queryCount();
+        st.width = view_.width, st.height = view_.height;
+        st.round = round_;
         st.seconds = secondsSince(start);
         passes.push_back(st);
         if (opt_.onPass) opt_.onPass(st, expand(kept));
@@ -466,6 +559,8 @@ private:
     std::vector<Triangle> triangles_;
     std::vector<TriangleRange> ranges_;
     CommandList list_;
+    OrthoView view_;  // the current call's
+    uint32_t round_ = 0;  // reliable with adaptive resolution: the current round of calls
     std::vector<std::vector<uint8_t>> exactHit_;  // reliable: per object and node, an exact pair may intersect
 };
 

@@ -42,6 +42,28 @@ std::pair<int, int> parseResolution(const std::string& text, const std::string& 
     return {w, h};
 }
 
+ResolutionSetting parseResolutionSetting(const std::string& text, const std::string& name) {
+    ResolutionSetting r;
+    if (text.rfind("auto", 0) != 0) {
+        std::tie(r.width, r.height) = parseResolution(text, name);
+        return r;
+    }
+    r.autoCoverage = kDefaultAutoCoverage;
+    if (text == "auto") return r;
+    const std::string k = text.size() > 5 && text[4] == ':' ? text.substr(5) : std::string();
+    double value = 0;
+    char extra = 0;
+    if (k.empty() || k.find_first_not_of("0123456789.") != std::string::npos ||
+        std::sscanf(k.c_str(), "%lf%c", &value, &extra) != 1)
+        throw InputError(name, "cannot read '" + text + "' (expected auto or auto:K with a number K, e.g. auto:2)");
+    if (!(value > 0 && value <= kMaxAutoCoverage))
+        throw InputError(
+            name,
+            "'" + text + "': K must be more than 0 and at most " + std::to_string(int(kMaxAutoCoverage)) + " pixels");
+    r.autoCoverage = value;
+    return r;
+}
+
 std::vector<Vec3d> parseDirections(const std::string& text, const std::string& name) {
     if (text == "axes") return axisDirections();
     if (!text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; })) {
@@ -80,7 +102,8 @@ std::vector<Vec3d> parseDirections(const std::string& text, const std::string& n
 CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& names) {
     CullideOptions o;
     o.method = named(names.method, [&] { return parseCullMethod(text.method); });
-    std::tie(o.width, o.height) = parseResolution(text.resolution, names.resolution);
+    const ResolutionSetting resolution = parseResolutionSetting(text.resolution, names.resolution);
+    o.width = resolution.width, o.height = resolution.height, o.autoCoverage = resolution.autoCoverage;
     o.depth = named(names.depth, [&] { return DepthFormat::parse(text.depth); });
     o.directions = parseDirections(text.directions, names.directions);
     o.hierarchy.kind = named(names.hierarchy, [&] { return parseHierarchyKind(text.hierarchy); });

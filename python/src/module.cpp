@@ -186,7 +186,7 @@ OptionNames pythonNames() {
 std::string resolutionText(const py::object& r) {
     if (py::isinstance<py::str>(r)) return r.cast<std::string>();
     if (py::isinstance<py::bool_>(r) || !py::isinstance<py::int_>(r))
-        fail("argument resolution: give an integer N or a text 'N' or 'WxH'");
+        fail("argument resolution: give an integer N or a text 'N', 'WxH', 'auto' or 'auto:K'");
     return std::to_string(r.cast<long long>());
 }
 
@@ -470,7 +470,8 @@ PYBIND11_MODULE(_cullide, m) {
             "passes",
             [](const PyResult& r) {
                 const size_t n = r.result.passes.size();
-                py::array_t<uint32_t> level(n), direction(n);
+                py::array_t<uint32_t> level(n), direction(n), round(n);
+                py::array_t<int32_t> width(n), height(n);
                 py::array_t<uint64_t> nodesIn(n), nodesOut(n), triIn(n), triOut(n), rendered(n), queries(n);
                 py::array_t<double> seconds(n);
                 for (size_t i = 0; i < n; ++i) {
@@ -479,12 +480,14 @@ PYBIND11_MODULE(_cullide, m) {
                     nodesIn.mutable_at(i) = p.nodesIn, nodesOut.mutable_at(i) = p.nodesOut;
                     triIn.mutable_at(i) = p.trianglesIn, triOut.mutable_at(i) = p.trianglesOut;
                     rendered.mutable_at(i) = p.trianglesRendered, queries.mutable_at(i) = p.queries;
+                    width.mutable_at(i) = p.width, height.mutable_at(i) = p.height, round.mutable_at(i) = p.round;
                     seconds.mutable_at(i) = p.seconds;
                 }
                 py::dict d;
                 d["level"] = level, d["direction"] = direction, d["nodes_in"] = nodesIn, d["nodes_out"] = nodesOut;
                 d["triangles_in"] = triIn, d["triangles_out"] = triOut, d["triangles_rendered"] = rendered;
-                d["queries"] = queries, d["seconds"] = seconds;
+                d["queries"] = queries, d["width"] = width, d["height"] = height, d["round"] = round;
+                d["seconds"] = seconds;
                 return d;
             },
             "One entry per reducePCS call, as numpy columns (the keys of `prune --json`'s passes).")

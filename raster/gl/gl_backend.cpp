@@ -108,6 +108,9 @@ public:
         GLint dims[2] = {0, 0};
         glGetIntegerv(GL_MAX_VIEWPORT_DIMS, dims);
         info_.maxViewport = std::min(dims[0], dims[1]);
+        GLint renderbuffer = 0;
+        glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &renderbuffer);
+        maxSide_ = std::min({int(info_.maxViewport), int(renderbuffer), kMaxViewportSide});
         GLint bounds[2] = {0, 0};
         glGetIntegerv(GL_VIEWPORT_BOUNDS_RANGE, bounds);
         viewportBoundsMin_ = bounds[0];
@@ -184,6 +187,8 @@ public:
     }
 
     int depthBits() const override { return depthBits_; }
+
+    int maxViewportSide() const override { return std::max(1, maxSide_); }
 
     std::string describe() const override {
         std::string s = "gl: " + info_.renderer + ", " + info_.version + ", " + info_.platform + ", " +
@@ -380,6 +385,7 @@ private:
     gl::EglContext context_;
     GlInfo info_;
     GLint viewportBoundsMin_ = 0;
+    int maxSide_ = 0;  // the largest viewport side: GL_MAX_VIEWPORT_DIMS, GL_MAX_RENDERBUFFER_SIZE
     GLuint program_ = 0, vao_ = 0, vbo_ = 0, ebo_ = 0, queryBuffer_ = 0, fbo_ = 0, rbo_ = 0;
     std::vector<GLint> uniforms_;
     std::vector<GLuint> queryPool_[2];  // SAMPLES_PASSED, ANY_SAMPLES_PASSED

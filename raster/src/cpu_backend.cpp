@@ -156,7 +156,9 @@ public:
             grid_.tileSize = options_.tileSize;
             grid_.tilesX = (view.width + options_.tileSize - 1) / options_.tileSize;
             grid_.tilesY = (view.height + options_.tileSize - 1) / options_.tileSize;
-            tileOut_.assign(grid_.count(), TileOut{});
+            // resize, not assign: the tiles kept keep their scratch (runTile resets each one), so
+            // that a run whose viewport changes per call (adaptive resolution) does not regrow it.
+            tileOut_.resize(grid_.count());
             ilo_.clear();  // the interval buffer is made (empty) on first use
             ihi_.clear();
         }

@@ -120,6 +120,8 @@ public:
         return DepthFormat::unorm(best);
     }
 
+    int maxViewportSide() const override { return std::max(1, maxSide_); }
+
     std::string describe() const override {
         std::string s = "vulkan: " + info_.device + " (" + info_.type + "), " + info_.driver + ", Vulkan " + info_.api +
             ", " + std::to_string(info_.subpixelBits) + " subpixel bits";
@@ -487,6 +489,9 @@ private:
         info_.subpixelBits = int(p.limits.subPixelPrecisionBits);
         info_.maxViewport = int(std::min(p.limits.maxViewportDimensions[0], p.limits.maxViewportDimensions[1]));
         viewportBoundsMin_ = p.limits.viewportBoundsRange[0];
+        maxSide_ = int(std::min({uint64_t(info_.maxViewport), uint64_t(p.limits.maxFramebufferWidth),
+                                 uint64_t(p.limits.maxFramebufferHeight), uint64_t(p.limits.maxImageDimension2D),
+                                 uint64_t(kMaxViewportSide)}));
         info_.hasD16 = depthAttachment(physical_, VK_FORMAT_D16_UNORM);
         info_.hasD24 = depthAttachment(physical_, VK_FORMAT_X8_D24_UNORM_PACK32);
         info_.hasD32F = depthAttachment(physical_, VK_FORMAT_D32_SFLOAT);
@@ -859,6 +864,7 @@ private:
     VulkanInfo info_;
     uint32_t apiVersion_ = VK_API_VERSION_1_1;
     float viewportBoundsMin_ = 0;
+    int maxSide_ = 0;  // the largest viewport side: viewport, framebuffer and 2D image limits
     VkInstance instance_ = VK_NULL_HANDLE;
     VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
     VkPhysicalDevice physical_ = VK_NULL_HANDLE;

@@ -60,10 +60,15 @@ int runPrune(const PruneOptions& o) {
                          "the scene has " + std::to_string(animation.frameCount()) +
                              " frames; choose one with --frame to write its PLY");
 
-    std::printf("%s: %s, %dx%d, %s, %zu direction(s), %s hierarchy (leaf %u, branching %u), %s\n", o.scene.c_str(),
-                toString(options.method), options.width, options.height, options.depth.name().c_str(),
-                options.directions.size(), toString(options.hierarchy.kind), options.hierarchy.leafSize,
-                options.hierarchy.branching, backend->describe().c_str());
+    char viewport[80];
+    if (options.autoCoverage > 0)
+        std::snprintf(viewport, sizeof viewport, "auto:%g (at least %dx%d)", options.autoCoverage, options.width,
+                      options.height);
+    else std::snprintf(viewport, sizeof viewport, "%dx%d", options.width, options.height);
+    std::printf("%s: %s, %s, %s, %zu direction(s), %s hierarchy (leaf %u, branching %u), %s\n", o.scene.c_str(),
+                toString(options.method), viewport, options.depth.name().c_str(), options.directions.size(),
+                toString(options.hierarchy.kind), options.hierarchy.leafSize, options.hierarchy.branching,
+                backend->describe().c_str());
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
     bool guaranteeBroken = false;  // --check found a false prune the method promises not to make
     study::Progress bar("prune", last - first, "frames", o.progress);
@@ -170,6 +175,8 @@ int runPrune(const PruneOptions& o) {
                                     {"objects", objects},
                                     {"frames", frames}};
         for (const Vec3d& d : options.directions) j["options"]["directions"].push_back({d.x(), d.y(), d.z()});
+        // Adaptive resolution: width x height is the smallest viewport; each pass has its own.
+        if (options.autoCoverage > 0) j["options"]["auto_coverage"] = options.autoCoverage;
         // The GL and Vulkan backends' descriptions name their driver; the CPU reference rasterizer has none.
         std::vector<std::string> drivers;
         if (o.backend != "cpu") drivers.push_back(backend->describe());

@@ -165,7 +165,7 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("--scenes", o->scenes,
                     "Scenes: bunny:N, cows:N, twist:N, cylinders:N[:C], or files (FILE@K: frame K)");
     sub->add_option("--methods", o->methods, "Methods (as prune --method)");
-    sub->add_option("--resolutions", o->resolutions, "Viewports: N or WxH");
+    sub->add_option("--resolutions", o->resolutions, "Viewports: N or WxH, or auto / auto:K (adaptive)");
     sub->add_option("--depths", o->depths, "Depth formats: 8..32 or float");
     sub->add_option("--directions", o->directions, "Direction sets: axes, N, or a list (one set per argument)");
     sub->add_option("--hierarchies", o->hierarchies, "connectivity | random");

@@ -33,14 +33,16 @@ using Json = nlohmann::ordered_json;
 Json workloadJson(const std::string& scene, const CullideOptions& options) {
     Json directions = Json::array();
     for (const Vec3d& d : options.directions) directions.push_back({d.x(), d.y(), d.z()});
-    return {{"scene", scene},
-            {"method", toString(options.method)},
-            {"resolution", {options.width, options.height}},
-            {"depth", options.depth.name()},
-            {"directions", directions},
-            {"hierarchy", toString(options.hierarchy.kind)},
-            {"leaf_size", options.hierarchy.leafSize},
-            {"branching", options.hierarchy.branching}};
+    Json j = {{"scene", scene},
+              {"method", toString(options.method)},
+              {"resolution", {options.width, options.height}},
+              {"depth", options.depth.name()},
+              {"directions", directions},
+              {"hierarchy", toString(options.hierarchy.kind)},
+              {"leaf_size", options.hierarchy.leafSize},
+              {"branching", options.hierarchy.branching}};
+    if (options.autoCoverage > 0) j["auto_coverage"] = options.autoCoverage;  // each list's view has its own size
+    return j;
 }
 
 Recording recordTrace(const Animation& animation, size_t first, size_t last, const CullideOptions& options,
@@ -373,7 +375,9 @@ void addCullideOptions(CLI::App* sub, OptionText& o) {
                     "intersecting triangle is ever pruned; CPU backend only; docs/reliable.md)")
         ->capture_default_str();
     sub->add_option("--resolution", o.resolution,
-                    "Viewport: N or WxH pixels (1 to " + std::to_string(kMaxViewportSide) + " per side)")
+                    "Viewport: N or WxH pixels (1 to " + std::to_string(kMaxViewportSide) +
+                        " per side), or auto / auto:K: per reducePCS call, pixels sized so that the PCS covers about K "
+                        "500x500 viewports (default 1; docs/cullide.md#adaptive-resolution)")
         ->capture_default_str();
     sub->add_option("--depth", o.depth, "Depth format: unorm bits 8..32 (e.g. 24, d16) or float")
         ->capture_default_str();

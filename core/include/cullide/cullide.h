@@ -88,8 +88,17 @@ struct PassStats {
     size_t trianglesIn = 0, trianglesOut = 0;
     size_t trianglesRendered = 0;  // triangles drawn, both passes together
     size_t queries = 0;
+    int width = 0, height = 0;  // the call's viewport (with --resolution auto, chosen per call)
+    uint32_t round = 0;  // reliable with --resolution auto: the round of calls (0, 1, ...); else 0
     double seconds = 0;  // wall time of the call, command building and backend included
 };
+
+// Adaptive resolution's default K (`--resolution auto` is auto:1: measured on the 270k bunny and
+// two cows, docs/cullide.md#adaptive-resolution) and largest K.
+inline constexpr double kDefaultAutoCoverage = 1;
+inline constexpr double kMaxAutoCoverage = 1024;
+// Pixels per call at most: 4096 x 4096 (a D24 buffer of 64 MiB).
+inline constexpr int64_t kDefaultAutoBudget = int64_t(4096) * 4096;
 
 // A PCS entry: a triangle of the scene (scene.h).
 using PcsTriangle = TriangleRef;
@@ -97,7 +106,15 @@ using PcsTriangle = TriangleRef;
 struct CullideOptions {
     CullMethod method = CullMethod::Modified;
     std::vector<Vec3d> directions = axisDirections();
+    // The viewport of every reducePCS call; with adaptive resolution, the smallest one.
     int width = 500, height = 500;
+    // Adaptive resolution (`--resolution auto[:K]`): 0 means fixed width x height. Otherwise K,
+    // and each call chooses its own viewport (adaptiveViewport) so that the PCS it draws covers
+    // about K times width x height pixels, never with coarser pixels than width x height would
+    // give, at most autoBudget pixels; and the reliable method repeats its rounds of calls on the
+    // shrinking PCS until one prunes nothing.
+    double autoCoverage = 0;
+    int64_t autoBudget = kDefaultAutoBudget;
     DepthFormat depth = DepthFormat::unorm(24);
     HierarchyOptions hierarchy;
     // Called after every reducePCS call with its statistics and the PCS it left (sorted by
@@ -112,7 +129,8 @@ struct CullideOptions {
     // build. Empty: every run builds its hierarchies, as the paper does.
     std::shared_ptr<HierarchyCache> hierarchyCache;
     // Throws InputError naming the option on absurd values (no directions, a zero or non-finite
-    // direction, a viewport outside 1..kMaxViewportSide).
+    // direction, a viewport outside 1..kMaxViewportSide, an adaptive K outside (0, kMaxAutoCoverage]
+    // or a budget smaller than width x height).
     void validate() const;
 };
 
@@ -153,5 +171,20 @@ void appendModifiedReducePcs(CommandList& list, std::span<const TriangleRange> r
 OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
                   std::span<const TriangleRange> ranges, const Vec3d& dir, int width, int height,
                   const DepthFormat& depth);
+
+// Adaptive resolution: the viewport of one reducePCS call in direction `dir` on the triangles in
+// `ranges`, a pure function of them (the same for any thread count). In the frame
+// OrthoView::looking(dir), A is the sum of the triangles' projected areas: the pixels a draw of
+// them covers, counted with multiplicity, is A / p^2 at pixel size p. The call wants the pixel at
+// which that is `coverage` base viewports (coverage * baseWidth * baseHeight): a large PCS gets
+// the base viewport, a small one finer pixels (the cost of a draw stays about that of the base's;
+// the pixel count shrinks as the PCS shrinks). Never coarser than the base's pixel (fitView's at
+// baseWidth x baseHeight): then the base viewport itself. Otherwise the viewport covering the
+// PCS's projected bounds at the wanted pixel (the PCS's aspect, not the base's), shrunk evenly to
+// at most `budget` pixels and `maxSide` per side; if that leaves it no finer than the base, the
+// base viewport.
+std::pair<int, int> adaptiveViewport(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                                     std::span<const TriangleRange> ranges, const Vec3d& dir, double coverage,
+                                     int baseWidth, int baseHeight, int64_t budget, int maxSide);
 
 }  // namespace cullide

@@ -203,6 +203,10 @@ public:
     // The CPU reference does; GL only where the driver offers conservative rasterization.
     virtual bool supportsConservative() const { return false; }
 
+    // The largest viewport side this backend can draw (at most kMaxViewportSide). Adaptive
+    // resolution (CullideOptions::autoCoverage) clamps each call's viewport to it.
+    virtual int maxViewportSide() const { return kMaxViewportSide; }
+
     // The current depth buffer.
     virtual DepthImage readDepth() = 0;
     // The same into `out`, whose buffer a backend may reuse: for callers that read many images

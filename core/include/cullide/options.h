@@ -28,7 +28,7 @@ inline constexpr uint32_t kMinBranching = 2, kMaxBranching = 64;
 // CullideOptions as typed; the defaults give CullideOptions' defaults.
 struct OptionText {
     std::string method = "modified";  // original | modified | reliable
-    std::string resolution = "500";  // N or WxH, each side 1..kMaxViewportSide
+    std::string resolution = "500";  // N or WxH, each side 1..kMaxViewportSide; or auto, auto:K
     std::string depth = "24";  // unorm bits 8..32 (24, d24, unorm24) or float (float, f32, d32f)
     std::string directions = "axes";  // axes | N (spread) | a list x,-y,z or '1 0 0;0 1 1'
     std::string hierarchy = "connectivity";  // connectivity | random
@@ -53,6 +53,15 @@ CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& na
 
 // A viewport "N" (N x N) or "WxH", each side 1..kMaxViewportSide.
 std::pair<int, int> parseResolution(const std::string& text, const std::string& name = "option --resolution");
+// A resolution setting: a fixed viewport (parseResolution; autoCoverage 0), or adaptive
+// resolution, "auto" (K = kDefaultAutoCoverage) or "auto:K" (0 < K <= kMaxAutoCoverage, a decimal
+// number: the drawn PCS covers about K base viewports' pixels), with the default 500x500 as its
+// base viewport (CullideOptions::autoCoverage).
+struct ResolutionSetting {
+    int width = 500, height = 500;
+    double autoCoverage = 0;
+};
+ResolutionSetting parseResolutionSetting(const std::string& text, const std::string& name = "option --resolution");
 // "axes", "N" (N spread directions, 1..10000), or a list "x,-y,z" / "1 0 0;0 1 1" of non-zero
 // directions (normalized).
 std::vector<Vec3d> parseDirections(const std::string& text, const std::string& name = "option --directions");

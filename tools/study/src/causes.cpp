@@ -193,7 +193,7 @@ Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth,
                     else ranges.push_back({uint32_t(g), 1});
                 }
             views[call] = fitView(world.mesh.positions, world.mesh.triangles, ranges, options.directions[st.direction],
-                                  options.width, options.height, options.depth);
+                                  st.width, st.height, options.depth);  // the call's own viewport
             directionOf[call] = st.direction;
         }
         inPcs.swap(next);

@@ -109,7 +109,7 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
             s.methods = r.texts(v, key, parseCullMethod);
         } else if (key == "resolutions") {
             s.resolutions = r.texts(
-                v, key, [](const std::string& t) { return parseResolution(t); }, 1, kMaxViewportSide);
+                v, key, [](const std::string& t) { return parseResolutionSetting(t); }, 1, kMaxViewportSide);
         } else if (key == "depths") {
             s.depths = r.texts(v, key, DepthFormat::parse, 8, 32);
         } else if (key == "directions") {

@@ -242,6 +242,9 @@ nlohmann::ordered_json passJson(const PassStats& p) {
             {"triangles_out", p.trianglesOut},
             {"triangles_rendered", p.trianglesRendered},
             {"queries", p.queries},
+            {"width", p.width},
+            {"height", p.height},
+            {"round", p.round},
             {"seconds", p.seconds}};
 }
 
