@@ -195,6 +195,39 @@ TEST(CpuBackend, ReadDepthIntoReusesTheBuffer) {
     EXPECT_EQ(into.values, small.values);
 }
 
+// A new viewport size reads as cleared to 1.0, though the backend fills it only when a list does
+// not start with a clear of its own (traps: a list without a clear, or a readDepth, after a
+// resize seeing stale or zero depths; a list that starts with a clear losing it).
+TEST(CpuBackend, ResizedViewReadsCleared) {
+    auto b = makeCpuBackend();
+    const std::vector<Vec3f> positions{{2, 2, 0.25f}, {30, 3, 0.5f}, {5, 25, 0.75f}};
+    const std::vector<Triangle> triangles{{0, 1, 2}};
+    b->setGeometry(positions, triangles);
+    CommandList fill;
+    fill.clear(0.0);  // leaves 0 everywhere: stale data for the next size
+    b->setView(windowView(64, 64));
+    b->execute(fill);
+    const uint32_t one = encodeDepth(1.0, DepthFormat::unorm(24));
+    b->setView(windowView(32, 32));  // smaller: reuses the buffer that holds zeros
+    for (uint32_t v : b->readDepth().values) ASSERT_EQ(v, one);
+    b->setView(windowView(64, 32));
+    CommandList drawOnly;  // no clear: the pending clear must be applied first
+    drawOnly.depthFunc(DepthFunc::Less);
+    drawOnly.draw(0, 1);
+    b->execute(drawOnly);
+    const DepthImage img = b->readDepth();
+    size_t drawn = 0, cleared = 0;
+    for (uint32_t v : img.values) (v == one ? cleared : drawn) += 1;
+    EXPECT_GT(drawn, 100u);
+    EXPECT_GT(cleared, 1000u);
+    EXPECT_EQ(drawn + cleared, img.values.size());
+    b->setView(windowView(48, 48));
+    CommandList halfClear;  // a list that starts with its own clear keeps that clear's value
+    halfClear.clear(0.5);
+    b->execute(halfClear);
+    for (uint32_t v : b->readDepth().values) ASSERT_EQ(v, encodeDepth(0.5, DepthFormat::unorm(24)));
+}
+
 // Trap: bad options silently accepted.
 TEST(CpuBackend, RejectsBadOptions) {
     CpuBackendOptions o;

@@ -152,7 +152,18 @@ public:
         params_.width = view.width;
         params_.height = view.height;
         if (resize) {
-            depth_.assign(size_t(view.width) * size_t(view.height), encodeDepth(1.0, view.depth));
+            // A new size starts cleared to 1.0, but lazily (depthPending_): a list that begins with
+            // a clear, as every reducePCS does, need not pay for the fill, which with a viewport
+            // sized per call (adaptive resolution) was a fifth of the run. Capacity grows by half
+            // at least, so that sizes that wander do not reallocate (and page-fault) every call.
+            const size_t n = size_t(view.width) * size_t(view.height);
+            if (depth_.capacity() < n) {
+                const size_t grown = std::max(n, depth_.capacity() + depth_.capacity() / 2);
+                std::vector<uint32_t>().swap(depth_);
+                depth_.reserve(grown);
+            }
+            depth_.resize(n);
+            depthPending_ = true;
             grid_.tileSize = options_.tileSize;
             grid_.tilesX = (view.width + options_.tileSize - 1) / options_.tileSize;
             grid_.tilesY = (view.height + options_.tileSize - 1) / options_.tileSize;
@@ -174,6 +185,10 @@ public:
                                  "draw range [" + std::to_string(c.first) + ", " +
                                      std::to_string(uint64_t(c.first) + c.count) + ") exceeds the geometry's " +
                                      std::to_string(triangles_.size()) + " triangles");
+        if (depthPending_) {  // setView's clear, unless the list's first command clears anyway
+            if (list.commands().empty() || list.commands().front().op != Command::Op::Clear) fillPendingDepth();
+            depthPending_ = false;
+        }
         stats_ = RasterStats{};
         std::vector<uint64_t> results;
         inArena([&] {
@@ -198,6 +213,10 @@ public:
     }
 
     void readDepthInto(DepthImage& out) override {
+        if (depthPending_) {
+            fillPendingDepth();
+            depthPending_ = false;
+        }
         std::vector<uint32_t> values = std::move(out.values);  // its buffer is reused
         out = imageOfView<DepthImage>();
         if (haveView_) values.assign(depth_.begin(), depth_.end());
@@ -216,6 +235,8 @@ private:
         img.format = view_.depth;
         return img;
     }
+
+    void fillPendingDepth() { std::fill(depth_.begin(), depth_.end(), encodeDepth(1.0, view_.depth)); }
 
     void ensureIntervals() {
         const size_t n = size_t(view_.width) * size_t(view_.height);
@@ -310,6 +331,7 @@ private:
     std::vector<SnapVertex> snapped_;  // window_ snapped once per vertex (fast path)
     bool windowValid_ = false;
     std::vector<uint32_t> depth_;
+    bool depthPending_ = false;  // depth_ reads as 1.0 everywhere, not yet written (setView)
     detail::PipelineState state_;
     RasterStats stats_;
 
