@@ -8,7 +8,8 @@
 # tools/cluster/study-array.sbatch (the job script README.md shows, checked here to be the same
 # text) as a 4-task array on a small sweep of the bundled scenes; waits; merges the shards with the
 # README's `cullide study merge`; and checks that the merge equals the unsharded run but for the
-# timing columns (`*_ms`; in the JSON lines also the per-call seconds and the provenance).
+# timing columns (`*_ms`; in the JSON lines also the per-call seconds, the provenance and the
+# command line that ran the shard).
 # It stops only the daemons it started (by their pid files) and removes the scratch folder, on
 # every exit path; on failure it prints the daemons' logs and the jobs' output, and exits 1.
 # Needs root (munged runs as the munge user, slurmd as root) and `bash tools/setup.sh` (slurm-wlm,
@@ -234,10 +235,12 @@ def rows(stem):  # CSV rows as dicts, without the timing columns
     with open(stem + ".csv", newline="") as f:
         return [{k: v for k, v in r.items() if not k.endswith("_ms")} for r in csv.DictReader(f)]
 
-def records(stem):  # JSON lines without timings (and per-call seconds) and provenance
+def records(stem):  # JSON lines without timings (and per-call seconds), provenance and command
     out = []
     for line in open(stem + ".jsonl"):
-        r = {k: v for k, v in json.loads(line).items() if not k.endswith("_ms") and k != "provenance"}
+        # "command" is the study's own command line: each shard's names its --shard and output.
+        r = {k: v for k, v in json.loads(line).items()
+             if not k.endswith("_ms") and k not in ("provenance", "command")}
         for p in r.get("passes", []):
             p.pop("seconds", None)
         out.append(r)
