@@ -32,7 +32,7 @@ struct ConsRec {
 
 // The allocator of the record arrays. Their elements are written by setup before anything reads
 // them (or marked kNoTiles), so growing an array leaves them unwritten instead of zeroing them
-// (a value-initialising resize was ~5% of a prune at 500 x 500: memset plus the page faults of
+// (a value-initialising resize was ~5% of a 270k prune's profile: memset plus the page faults of
 // first touch). Records are implicit-lifetime aggregates (trivially copyable and destructible),
 // whose storage from the allocator holds them without a constructor call. From 2 MiB on the
 // array is aligned to 2 MiB and asks for transparent huge pages (MADV_HUGEPAGE, advice only):
