@@ -246,31 +246,6 @@ TEST(OracleBroadPhase, OutwardRoundingIsNextafter) {
     }
 }
 
-// Trap: the oracle's arrays come from posix_memalign, not new T[n]: an empty one must still be
-// valid, each must keep its type's alignment (the 64-byte primitive records), and one of 2 MiB
-// or more (huge pages advised) must start on a 2 MiB boundary and be writable to its end.
-TEST(OracleBroadPhase, BuffersKeepAlignment) {
-    struct alignas(64) Record {
-        float x[16];
-    };
-    for (size_t n : {size_t(0), size_t(1), size_t(1000), size_t(40000)}) {
-        detail::Buffer<Record> b(n);
-        ASSERT_NE(b.data(), nullptr);
-        EXPECT_EQ(b.size(), n);
-        EXPECT_EQ(reinterpret_cast<uintptr_t>(b.data()) % 64, 0u);
-        if (n * sizeof(Record) >= (size_t(2) << 20)) {
-            EXPECT_EQ(reinterpret_cast<uintptr_t>(b.data()) % (2 << 20), 0u);
-        }
-        for (size_t i = 0; i < n; ++i) b[i].x[15] = float(i);
-        if (n > 0) {
-            EXPECT_EQ(b[n - 1].x[15], float(n - 1));
-        }
-    }
-    detail::Buffer<uint64_t> moved(5000);
-    moved = {};  // released through std::free
-    EXPECT_EQ(moved.size(), 0u);
-}
-
 // Trap: radixSortHigh sorts small buckets by insertion and larger ones by LSD passes; both must
 // be stable on bits [32, 32 + keyBits) only and leave every bucket in the array the returned
 // pointer names (uniform keys: small buckets; keys below 2^(keyBits - 8): one bucket holds all).

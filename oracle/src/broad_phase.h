@@ -1,17 +1,11 @@
 // The oracle's broad phase: Embree 3's rtcCollide on user geometry (internal to oracle/).
 #pragma once
 
-#include <sys/mman.h>
+#include "cullide/unwritten.h"
 
-#include <algorithm>
 #include <bit>
 #include <cstdint>
-#include <cstdlib>
-#include <memory>
-#include <new>
 #include <span>
-#include <type_traits>
-#include <vector>
 
 namespace cullide::oracle::detail {
 
@@ -20,41 +14,11 @@ struct Box {
     float lo[3], hi[3];
 };
 
-// An array whose elements start unwritten (default-initialised: trivial ones are left as they
-// are; aligned as T asks), so that the parallel loops that fill it touch its fresh pages first,
-// not a serial memset. From 2 MiB on it is aligned to 2 MiB and asks for transparent huge pages
-// (MADV_HUGEPAGE; this kernel's default is madvise): one page fault per 2 MiB instead of one per
-// 4 KiB, which on a 1M-triangle bunny were a fifth of `cullide oracle`'s time (setup 400 ms).
-// Only whole 2 MiB pages inside the array are advised: its memory use stays the same.
+// The oracle's large arrays are filled by parallel loops before they are read: they start
+// unwritten, so those loops touch their fresh pages first, not a serial memset, and from 2 MiB on
+// they ask for huge pages (cullide/unwritten.h).
 template <typename T>
-class Buffer {
-public:
-    static_assert(std::is_trivially_destructible_v<T>);
-    Buffer() = default;
-    explicit Buffer(size_t n) : size_(n) {
-        constexpr size_t kHuge = size_t(2) << 20;
-        const size_t bytes = std::max<size_t>(n * sizeof(T), 1);
-        void* p = nullptr;
-        const size_t align = bytes >= kHuge ? kHuge : std::max(alignof(T), sizeof(void*));
-        if (posix_memalign(&p, align, bytes) != 0) throw std::bad_alloc();
-        data_.reset(static_cast<T*>(p));
-        if (bytes >= kHuge) madvise(p, bytes / kHuge * kHuge, MADV_HUGEPAGE);  // advice only: no error
-        std::uninitialized_default_construct_n(data_.get(), n);
-    }
-    T* data() { return data_.get(); }
-    const T* data() const { return data_.get(); }
-    size_t size() const { return size_; }
-    T& operator[](size_t i) { return data_[i]; }
-    const T& operator[](size_t i) const { return data_[i]; }
-    operator std::span<const T>() const { return {data_.get(), size_}; }
-
-private:
-    struct Free {
-        void operator()(T* p) const { std::free(p); }
-    };
-    std::unique_ptr<T[], Free> data_;
-    size_t size_ = 0;
-};
+using Buffer = UnwrittenVector<T>;
 
 // The float below / above x (std::nextafter toward -inf / +inf, which is a libm call per corner:
 // 1.5% of the oracle on small meshes), for finite x only: -0 and +0 both step to the smallest

@@ -7,11 +7,9 @@
 #include "conservative.h"
 #include "triangle_setup.h"
 
-#include <sys/mman.h>
+#include "cullide/unwritten.h"
 
 #include <array>
-#include <new>
-#include <type_traits>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -30,45 +28,10 @@ struct ConsRec {
     ConsEdges e;
 };
 
-// The allocator of the record arrays. Their elements are written by setup before anything reads
-// them (or marked kNoTiles), so growing an array leaves them unwritten instead of zeroing them
-// (a value-initialising resize was ~5% of a 270k prune's profile: memset plus the page faults of
-// first touch). Records are implicit-lifetime aggregates (trivially copyable and destructible),
-// whose storage from the allocator holds them without a constructor call. From 2 MiB on the
-// array is aligned to 2 MiB and asks for transparent huge pages (MADV_HUGEPAGE, advice only):
-// one page fault per 2 MiB instead of one per 4 KiB when it is first written.
+// The record arrays: setup writes their elements before anything reads them (or marks them
+// kNoTiles), so growing one leaves them unwritten (cullide/unwritten.h).
 template <typename T>
-struct UnwrittenAllocator {
-    static_assert(std::is_trivially_copyable_v<T> && std::is_trivially_destructible_v<T> && std::is_aggregate_v<T>);
-    using value_type = T;
-    static constexpr size_t kHuge = size_t(2) << 20;
-
-    UnwrittenAllocator() = default;
-    template <typename U>
-    UnwrittenAllocator(const UnwrittenAllocator<U>&) noexcept {}
-    T* allocate(size_t n) {
-        const size_t bytes = n * sizeof(T);
-        if (bytes < kHuge) return static_cast<T*>(::operator new(bytes, std::align_val_t(alignof(T))));
-        void* p = ::operator new(bytes, std::align_val_t(kHuge));
-        madvise(p, bytes / kHuge * kHuge, MADV_HUGEPAGE);
-        return static_cast<T*>(p);
-    }
-    void deallocate(T* p, size_t n) noexcept {
-        ::operator delete(p, std::align_val_t(n * sizeof(T) < kHuge ? alignof(T) : kHuge));
-    }
-    template <typename U>
-    void construct(U*) noexcept {}  // resize(n): left unwritten
-    template <typename U, typename... Args>
-    void construct(U* p, Args&&... args) {
-        ::new (static_cast<void*>(p)) U{std::forward<Args>(args)...};
-    }
-    template <typename U>
-    bool operator==(const UnwrittenAllocator<U>&) const noexcept {
-        return true;
-    }
-};
-template <typename T>
-using RecordArray = std::vector<T, UnwrittenAllocator<T>>;
+using RecordArray = UnwrittenVector<T>;
 
 // The records of the triangles a list draws, in triangle order: a draw [first, first + count) is
 // the record range [begin[first], end[first + count - 1]). Setup writes the records in place: the
