@@ -6,6 +6,7 @@
 #include "cullide/mesh_io.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <limits>
@@ -440,4 +441,28 @@ TEST(Hierarchy, ConnectivityMatchesReferenceOnBundledMeshes) {
     for (const char* name : {"bunny.off", "cow.off"})
         expectSameAsReference(loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/" + name), {1, 16, 1000}, {2, 4, 64},
                               name);
+}
+
+// Nodes of 2^16 triangles and more split their children in parallel, each subtree in a list of its
+// own, appended afterwards. Traps: subtrees sharing scratch (a race TSan sees, or wrong orders),
+// appended with the wrong index shift or out of child order, or an overflow row (non-manifold
+// edge) followed to a position of another subtree. The result must equal the one-thread
+// reference and be the same under one worker thread as under all.
+TEST(Hierarchy, ParallelSubtreesMatchReference) {
+    const Mesh pool = randomMesh(4, 100000, 30000);
+    const Mesh sheet = grid(200);  // 80k triangles, one component
+    for (const Mesh* m : {&pool, &sheet}) {
+        ASSERT_GE(m->triangles.size(), size_t(1) << 16);
+        expectSameAsReference(*m, {16}, {2, 4}, m == &pool ? "pool 30000" : "grid 200");
+        const HierarchyOptions o;
+        const Hierarchy all = buildHierarchy(*m, o);
+        tbb::task_arena one(1);
+        const Hierarchy single = one.execute([&] { return buildHierarchy(*m, o); });
+        EXPECT_EQ(all.order, single.order);
+        ASSERT_EQ(all.nodes.size(), single.nodes.size());
+        for (size_t i = 0; i < all.nodes.size(); ++i)
+            EXPECT_TRUE(all.nodes[i].firstChild == single.nodes[i].firstChild &&
+                        all.nodes[i].first == single.nodes[i].first)
+                << "node " << i;
+    }
 }

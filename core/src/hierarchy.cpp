@@ -8,12 +8,14 @@
 #include "cullide/hierarchy.h"
 
 #include "cullide/error.h"
+#include "cullide/parallel.h"
 #include "cullide/unwritten.h"
 
 #include <algorithm>
 #include <limits>
 #include <random>
 #include <span>
+#include <vector>
 
 namespace cullide {
 
@@ -62,6 +64,25 @@ uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
 // A triangle with more than three neighbours (on a non-manifold edge) has slot 0 = kEscape and
 // its neighbours' triangle ids in overflow_ (slots 1, 2: offset and count), found through posOf_
 // (triangle id -> position) and tested against the range.
+// What one thread's splits write besides the shared arrays, indexed from the start of the range
+// being split: queue (breadth-first order, then the new order), tmp (pieces, then triangle ids),
+// tmpSlots (rebuilt rows, 3 each), and the small stacks.
+struct Scratch {
+    UnwrittenVector<uint32_t> queue, tmp, tmpSlots;
+    std::vector<uint32_t> sizes, pieceStart;
+    std::vector<uint8_t> moved;
+
+    void reserve(uint32_t n) {  // for ranges of up to n positions
+        queue.resize(size_t(n) + 1);  // + 1: a search writes one past its last entry
+        tmp.resize(size_t(n) + 1);
+        if (tmpSlots.size() < 3 * size_t(n)) tmpSlots.resize(3 * size_t(n));  // the root's: the incidence array
+    }
+};
+
+// Nodes of at least this many triangles split their children in parallel (a 1M-triangle build
+// has 16 such nodes at leaf size 16, branching 4; smaller subtrees are not worth a task).
+constexpr uint32_t kParallelNode = 1 << 16;
+
 class Builder {
 public:
     Builder(const Mesh& mesh, const HierarchyOptions& options, Hierarchy& out)
@@ -82,11 +103,10 @@ public:
         if (opt_.kind == HierarchyKind::Connectivity) {
             CULLIDE_CHECK(n < kFirst, "triangle count leaves room for the labels");
             buildAdjacency();
+            root_.reserve(n);
             mark_.resize(n);
-            queue_.resize(n + 1);  // + 1: a search writes one past its last entry
-            tmp_.resize(n + 1);
         }
-        split(0);
+        split(out_.nodes, 0, root_);
     }
 
 private:
@@ -150,34 +170,62 @@ private:
         }
         // Rebuilt rows are written aside, then copied back: the incidence array (3n entries, as
         // many as the slots) serves for that.
-        tmpSlots_ = std::move(incident);
+        root_.tmpSlots = std::move(incident);
     }
 
-    void split(uint32_t nodeIndex) {
-        const HierarchyNode node = out_.nodes[nodeIndex];
+    // Splits nodes[i] and its descendants, appending them to `nodes` depth first: a node's
+    // children are contiguous, followed by the first child's descendants, then the second's, ...
+    //
+    // A large node's children are split in parallel, each subtree in a list of its own (its root
+    // at 0, its descendants after it) with scratch of its own, then appended in child order with
+    // their indices shifted: the same nodes, in the same order, as one thread would make. The
+    // subtrees' positions are disjoint ranges, so they share the arrays indexed by position or by
+    // triangle id (each writes only its own part) and read the overflow rows only.
+    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s) {
+        const HierarchyNode node = nodes[i];
         if (node.count <= opt_.leafSize) return;
         const uint32_t k = std::min<uint32_t>(opt_.branching, node.count);
-        // sizes_ is a stack: this node's children stay on it while their subtrees push theirs.
-        const size_t base = sizes_.size();
+        // s.sizes is a stack: this node's children stay on it while their subtrees push theirs.
+        const size_t base = s.sizes.size();
         if (opt_.kind == HierarchyKind::Connectivity) {
-            partition(node.first, node.first + node.count, k, kNone);
+            partition(s, node.first, node.first + node.count, k, kNone);
         } else {
-            for (uint32_t i = 0; i < k; ++i) sizes_.push_back(node.count / k + (i < node.count % k ? 1 : 0));
+            for (uint32_t c = 0; c < k; ++c) s.sizes.push_back(node.count / k + (c < node.count % k ? 1 : 0));
         }
 
-        const uint32_t firstChild = uint32_t(out_.nodes.size());
-        const uint32_t childCount = uint32_t(sizes_.size() - base);
-        out_.nodes[nodeIndex].firstChild = firstChild;
-        out_.nodes[nodeIndex].childCount = childCount;
+        const uint32_t firstChild = uint32_t(nodes.size());
+        const uint32_t childCount = uint32_t(s.sizes.size() - base);
+        nodes[i].firstChild = firstChild;
+        nodes[i].childCount = childCount;
         uint32_t first = node.first;
-        for (size_t i = base; i < sizes_.size(); ++i) {
-            const uint32_t size = sizes_[i];
+        for (size_t c = base; c < s.sizes.size(); ++c) {
+            const uint32_t size = s.sizes[c];
             CULLIDE_CHECK(size > 0 && size < node.count, "a child is smaller than its parent and not empty");
-            out_.nodes.push_back({first, size, 0, 0, node.depth + 1});
+            nodes.push_back({first, size, 0, 0, node.depth + 1});
             first += size;
         }
-        sizes_.resize(base);
-        for (uint32_t i = 0; i < childCount; ++i) split(firstChild + i);
+        s.sizes.resize(base);
+        if (node.count < kParallelNode) {
+            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s);
+            return;
+        }
+        std::vector<std::vector<HierarchyNode>> sub(childCount);
+        parallelForEach(0, childCount, [&](size_t c) {
+            sub[c] = {nodes[firstChild + c]};
+            Scratch local;
+            if (opt_.kind == HierarchyKind::Connectivity) local.reserve(sub[c][0].count);
+            split(sub[c], 0, local);
+        });
+        for (uint32_t c = 0; c < childCount; ++c) {
+            // Local index j >= 1 lands at nodes.size() + j - 1; leaves keep firstChild 0.
+            const uint32_t shift = uint32_t(nodes.size()) - 1;
+            auto shifted = [&](HierarchyNode n) {
+                if (!n.isLeaf()) n.firstChild += shift;
+                return n;
+            };
+            nodes[firstChild + c] = shifted(sub[c][0]);
+            for (size_t j = 1; j < sub[c].size(); ++j) nodes.push_back(shifted(sub[c][j]));
+        }
     }
 
     // Calls f(q) for the neighbours q of position p in the range [lo, hi), in increasing order
@@ -215,7 +263,7 @@ private:
     // then does it need rows.
     bool needsRows(uint32_t count, uint32_t k) const { return count > opt_.leafSize || (k >= 2 && count >= 2); }
 
-    // Reorders the positions [lo, hi) into k consecutive parts (their sizes pushed on sizes_),
+    // Reorders the positions [lo, hi) into k consecutive parts (their sizes pushed on s.sizes),
     // each a compact patch connected through shared edges where the mesh allows: recursive
     // graph-growing bisection. The first part of a bisection is a prefix of the breadth-first
     // order from a pseudo-peripheral triangle (a prefix of a breadth-first order is connected),
@@ -223,20 +271,20 @@ private:
     // pieces (cut off from its largest piece, so bordered by the first part) move to the first
     // part. Sizes are therefore near-equal, not exact.
     // `hint`: a position on the range's periphery, when the caller knows one (kNone otherwise).
-    void partition(uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint) {
+    void partition(Scratch& s, uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint) {
         const uint32_t n = hi - lo;
         if (k < 2 || n < 2) {
-            sizes_.push_back(n);
+            s.sizes.push_back(n);
             return;
         }
         const uint32_t half = k / 2;
         const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
 
         std::fill(mark_.begin() + lo, mark_.begin() + hi, kOpen);
-        const uint32_t seed = hint != kNone ? hint : farthest(lo, hi);
+        const uint32_t seed = hint != kNone ? hint : farthest(s, lo, hi);
         // Breadth-first order over the range from the seed; when a component is exhausted, go on
         // from the first unvisited position.
-        uint32_t* bfs = queue_.data();
+        uint32_t* bfs = s.queue.data();
         uint32_t size = 0, scan = lo, start = seed;
         while (size < n) {
             mark_[start] = kVisited;
@@ -246,46 +294,46 @@ private:
             if (scan < hi) start = scan;
         }
 
-        // Label the first part kFirst, then find the pieces of the rest, one after another in tmp_.
+        // Label the first part kFirst, then find the pieces of the rest, one after another in s.tmp.
         for (uint32_t i = 0; i < n; ++i) mark_[bfs[i]] = i < target ? kFirst : kOpen;
-        uint32_t* pieces = tmp_.data();
+        uint32_t* pieces = s.tmp.data();
         uint32_t pieceEnd = 0;
-        pieceStart_.clear();
+        s.pieceStart.clear();
         for (uint32_t i = target; i < n; ++i) {
             if (mark_[bfs[i]] != kOpen) continue;
-            pieceStart_.push_back(pieceEnd);
+            s.pieceStart.push_back(pieceEnd);
             mark_[bfs[i]] = kVisited;
             pieces[pieceEnd++] = bfs[i];
             pieceEnd = grow(pieces, pieceEnd - 1, pieceEnd, lo, hi);
         }
-        pieceStart_.push_back(pieceEnd);
-        const size_t pieceCount = pieceStart_.size() - 1;
-        auto pieceSize = [&](size_t p) { return pieceStart_[p + 1] - pieceStart_[p]; };
+        s.pieceStart.push_back(pieceEnd);
+        const size_t pieceCount = s.pieceStart.size() - 1;
+        auto pieceSize = [&](size_t p) { return s.pieceStart[p + 1] - s.pieceStart[p]; };
         size_t largest = 0;
         for (size_t p = 1; p < pieceCount; ++p)
             if (pieceSize(p) > pieceSize(largest)) largest = p;
 
         // The new order, in bfs: the first part (its prefix is in place), then the second.
-        moved_.assign(pieceCount, 0);
+        s.moved.assign(pieceCount, 0);
         uint32_t f = target;
         for (size_t p = 0; p < pieceCount; ++p) {
             if (p == largest) continue;  // stays in the second part whatever it touches
             bool touchesFirst = false;
-            for (uint32_t i = pieceStart_[p]; i < pieceStart_[p + 1] && !touchesFirst; ++i)
+            for (uint32_t i = s.pieceStart[p]; i < s.pieceStart[p + 1] && !touchesFirst; ++i)
                 forNeighbours(pieces[i], lo, hi, [&](uint32_t u) { touchesFirst |= mark_[u] == kFirst; });
             if (!touchesFirst) continue;
-            moved_[p] = 1;
-            f = uint32_t(std::copy(pieces + pieceStart_[p], pieces + pieceStart_[p + 1], bfs + f) - bfs);
+            s.moved[p] = 1;
+            f = uint32_t(std::copy(pieces + s.pieceStart[p], pieces + s.pieceStart[p + 1], bfs + f) - bfs);
         }
-        for (size_t p = 0, s = f; p < pieceCount; ++p)
-            if (!moved_[p]) s = std::copy(pieces + pieceStart_[p], pieces + pieceStart_[p + 1], bfs + s) - bfs;
+        for (size_t p = 0, e = f; p < pieceCount; ++p)
+            if (!s.moved[p]) e = std::copy(pieces + s.pieceStart[p], pieces + s.pieceStart[p + 1], bfs + e) - bfs;
 
         // Apply it. mark_ maps each old position to its new one, and the triangle ids and rows
         // are scattered by it (reading old positions in order, where a gather by new position
         // would read them at random).
         for (uint32_t j = 0; j < n; ++j) mark_[bfs[j]] = lo + j;
-        for (uint32_t p = lo; p < hi; ++p) tmp_[mark_[p] - lo] = out_.order[p];
-        std::copy(tmp_.begin(), tmp_.begin() + n, out_.order.begin() + lo);
+        for (uint32_t p = lo; p < hi; ++p) s.tmp[mark_[p] - lo] = out_.order[p];
+        std::copy(s.tmp.begin(), s.tmp.begin() + n, out_.order.begin() + lo);
         if (!posOf_.empty())
             for (uint32_t p = lo; p < hi; ++p) posOf_[out_.order[p]] = p;
         if (needsRows(f, half) || needsRows(n - f, k - half)) {
@@ -296,7 +344,7 @@ private:
                 const uint32_t np = mark_[p];
                 const uint32_t a = np < mid ? lo : mid, b = np < mid ? mid : hi;
                 const uint32_t* slot = slots_.data() + 3 * size_t(p);
-                uint32_t* out = tmpSlots_.data() + 3 * size_t(np - lo);
+                uint32_t* out = s.tmpSlots.data() + 3 * size_t(np - lo);
                 if (slot[0] == kEscape) {
                     std::copy(slot, slot + 3, out);
                     continue;
@@ -306,20 +354,20 @@ private:
                     out[i] = q >= a && q < b ? q : np;
                 }
             }
-            std::copy(tmpSlots_.begin(), tmpSlots_.begin() + 3 * size_t(n), slots_.begin() + 3 * size_t(lo));
+            std::copy(s.tmpSlots.begin(), s.tmpSlots.begin() + 3 * size_t(n), slots_.begin() + 3 * size_t(lo));
         }
 
         // Peripheral starts for the halves, for free: the first part is a ball around the seed
         // whose last-reached triangle lies on its rim; the second part's first triangle borders
         // the first part. (The second part is a breadth-first order too, so its rim is its end.)
-        partition(lo, lo + f, half, lo + f - 1);
-        partition(lo + f, hi, k - half, hi - 1);
+        partition(s, lo, lo + f, half, lo + f - 1);
+        partition(s, lo + f, hi, k - half, hi - 1);
     }
 
     // The position of [lo, hi) farthest in hops from `from` (ties: the last reached in
     // breadth-first order). Expects the range labelled kOpen and leaves it so.
-    uint32_t farthest(uint32_t from, uint32_t hi) {
-        uint32_t* queue = queue_.data();
+    uint32_t farthest(Scratch& s, uint32_t from, uint32_t hi) {
+        uint32_t* queue = s.queue.data();
         queue[0] = from;
         mark_[from] = kVisited;
         const uint32_t size = grow(queue, 0, 1, from, hi);  // from is the range's first position
@@ -334,16 +382,13 @@ private:
     HierarchyOptions opt_;
     Hierarchy& out_;
     std::mt19937_64 rng_;
-    std::vector<uint32_t> sizes_;
-    // Connectivity only. By position: slots_ (rows, 3 each; tmpSlots_ while rebuilding), mark_
-    // (labels during a bisection, then old -> new position), queue_
-    // (breadth-first order, then the new order), tmp_ (pieces, then triangle ids). By triangle
-    // id, only when some row overflows: posOf_.
-    // The arrays of n or 3n entries are written before they are read: they start unwritten
-    // (cullide/unwritten.h; zeroing them was 12% of a 1M build).
-    UnwrittenVector<uint32_t> slots_, tmpSlots_, mark_, queue_, tmp_;
-    std::vector<uint32_t> overflow_, posOf_, pieceStart_;
-    std::vector<uint8_t> moved_;
+    Scratch root_;  // the root's, and every subtree's split on this thread
+    // Connectivity only, shared by parallel subtrees. By position: slots_ (rows, 3 each), mark_
+    // (labels during a bisection, then old -> new position). By triangle id, only when some row
+    // overflows: posOf_. slots_ and mark_ start unwritten (cullide/unwritten.h; zeroing the
+    // arrays of n or 3n entries was 12% of a 1M build).
+    UnwrittenVector<uint32_t> slots_, mark_;
+    std::vector<uint32_t> overflow_, posOf_;
 };
 
 }  // namespace

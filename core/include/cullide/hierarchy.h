@@ -11,8 +11,9 @@
 //   - A node is split while it holds more than `leafSize` triangles, into up to `branching`
 //     children of near-equal size (exactly equal, to one triangle, for Random; for Connectivity
 //     a few triangles may move between siblings to keep patches connected).
-//   - Deterministic: same mesh and options, same hierarchy (no unordered iteration, no threads
-//     inside one object's build; a seeded std::mt19937_64 with our own integer draws).
+//   - Deterministic: same mesh and options, same hierarchy, for any thread count (no unordered
+//     iteration; a large node's subtrees are built in parallel but laid out as one thread would;
+//     a seeded std::mt19937_64 with our own integer draws).
 #pragma once
 
 #include "cullide/mesh.h"
