@@ -138,10 +138,12 @@ private:
         for (size_t v = nv; v > 0; --v) vstart[v] = vstart[v - 1];
         vstart[0] = 0;
 
+        // The rows, in parallel blocks: each row depends on the incidence only. A row longer than
+        // three goes to overflow_, which is appended in triangle order afterwards (non-manifold
+        // edges are rare), so the layout does not depend on the threads.
         slots_.resize(3 * size_t(n));
         overflow_.clear();
-        std::vector<uint32_t> row;
-        for (uint32_t t = 0; t < n; ++t) {
+        auto rowOf = [&](uint32_t t, std::vector<uint32_t>& row) {
             const Triangle& tri = mesh_.triangles[t];
             row.clear();
             for (int e = 0; e < 3; ++e) {
@@ -155,15 +157,31 @@ private:
                 }
             }
             row.resize(size_t(sortUnique(row.data(), row.data() + row.size()) - row.data()));
-            uint32_t* slot = slots_.data() + 3 * size_t(t);
-            if (row.size() <= 3) {
-                for (size_t i = 0; i < 3; ++i) slot[i] = i < row.size() ? row[i] : t;
-            } else {
+        };
+        constexpr uint32_t kBlock = 16384;
+        const uint32_t blocks = (n + kBlock - 1) / kBlock;
+        std::vector<std::vector<uint32_t>> longRows(blocks);  // per block: its triangles with long rows
+        parallelForEach(0, blocks, [&](size_t blk) {
+            std::vector<uint32_t> row;
+            for (uint32_t t = uint32_t(blk) * kBlock, e = std::min(n, t + kBlock); t < e; ++t) {
+                rowOf(t, row);
+                uint32_t* slot = slots_.data() + 3 * size_t(t);
+                if (row.size() <= 3) {
+                    for (size_t i = 0; i < 3; ++i) slot[i] = i < row.size() ? row[i] : t;
+                } else {
+                    longRows[blk].push_back(t);
+                }
+            }
+        });
+        std::vector<uint32_t> row;
+        for (const std::vector<uint32_t>& ts : longRows)
+            for (uint32_t t : ts) {
+                rowOf(t, row);
                 CULLIDE_CHECK(overflow_.size() + row.size() < kNone, "overflow rows fit 32-bit offsets");
+                uint32_t* slot = slots_.data() + 3 * size_t(t);
                 slot[0] = kEscape, slot[1] = uint32_t(overflow_.size()), slot[2] = uint32_t(row.size());
                 overflow_.insert(overflow_.end(), row.begin(), row.end());
             }
-        }
         if (!overflow_.empty()) {
             posOf_.resize(n);
             for (uint32_t t = 0; t < n; ++t) posOf_[t] = t;
