@@ -227,6 +227,9 @@ private:
             for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s);
             return;
         }
+        // A node this large is the root or a parallel task's own root, so its scratch serves no
+        // later sibling: freed before the children allocate theirs (peak memory).
+        s.queue = {}, s.tmp = {}, s.tmpSlots = {};
         std::vector<std::vector<HierarchyNode>> sub(childCount);
         parallelForEach(0, childCount, [&](size_t c) {
             sub[c] = {nodes[firstChild + c]};
