@@ -39,7 +39,12 @@ public:
     static_assert(std::is_trivially_destructible_v<T>, "elements are never destroyed one by one");
     using value_type = T;
     static constexpr size_t kHuge = size_t(2) << 20;
+#if defined(__SANITIZE_ADDRESS__)
+    // Under AddressSanitizer every array comes from its heap, whose redzones catch an overrun.
+    static constexpr size_t kMapped = std::numeric_limits<size_t>::max();
+#else
     static constexpr size_t kMapped = size_t(256) << 10;  // from here on, pages of its own
+#endif
 
     UnwrittenAllocator() = default;
     template <typename U>
@@ -48,7 +53,12 @@ public:
     T* allocate(size_t n) {
         if (n > max_size()) throw std::bad_array_new_length();
         const size_t bytes = n * sizeof(T);
-        if (bytes < kMapped) return static_cast<T*>(::operator new(bytes, std::align_val_t(alignof(T))));
+        if (bytes < kMapped) {
+            if (bytes < kHuge) return static_cast<T*>(::operator new(bytes, std::align_val_t(alignof(T))));
+            void* p = ::operator new(bytes, std::align_val_t(kHuge));
+            madvise(p, bytes / kHuge * kHuge, MADV_HUGEPAGE);
+            return static_cast<T*>(p);
+        }
         // Mapped here; from 2 MiB on 2 MiB aligned: the head and tail of a mapping one huge page
         // longer are unmapped again (an unmapped range costs no memory).
         const size_t len = mappedBytes(bytes), extra = bytes >= kHuge ? kHuge : 0;
@@ -64,10 +74,12 @@ public:
     }
     void deallocate(T* p, size_t n) noexcept {
         const size_t bytes = n * sizeof(T);
-        if (bytes < kMapped) ::operator delete(p, std::align_val_t(alignof(T)));
+        if (bytes < kMapped) ::operator delete(p, std::align_val_t(bytes < kHuge ? alignof(T) : kHuge));
         else munmap(p, mappedBytes(bytes));
     }
-    static constexpr size_t max_size() noexcept { return (std::numeric_limits<size_t>::max() - kHuge) / sizeof(T); }
+    static constexpr size_t max_size() noexcept {
+        return (std::numeric_limits<size_t>::max() - kHuge) / sizeof(T);
+    }
     // resize(n) and vector(n): nothing written. An implicit-lifetime aggregate or scalar (trivially
     // copyable and destructible) lives in the storage without a constructor call, so its default
     // member initialisers, if any, are skipped too; any other type is default-initialised (Eigen's
