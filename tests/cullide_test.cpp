@@ -249,6 +249,26 @@ TEST(Cullide, ConsumedSceneGivesTheSamePcsAndIsEmptied) {
     EXPECT_TRUE(consumed.objects.empty());  // NOLINT(bugprone-use-after-move): emptied on purpose
 }
 
+// runCullide lends its geometry to the CPU backend (no copy) for the run only. Traps: the backend
+// still reading the run's freed arrays afterwards (ASan: use after free), instead of having
+// forgotten them, so a draw without new geometry is refused; and a second run on the same
+// backend answering differently from the first.
+TEST(Cullide, LentGeometryIsTakenBackAfterTheRun) {
+    const Scene s = sceneOf({{box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), rotation(0.3, 0.5, 0.7)},
+                             {box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), rotation(0.9, 0.2, 0.4, Vec3f(0.5, 0.4, 0.3))}});
+    auto backend = raster::makeCpuBackend();
+    CullideOptions o;
+    o.width = o.height = 64;
+    const CullideResult first = runCullide(s, *backend, o);
+    CommandList list;
+    list.clear(1.0);
+    list.draw(0, 1);
+    EXPECT_THROW(backend->execute(list), InputError);
+    const CullideResult second = runCullide(s, *backend, o);
+    EXPECT_EQ(first.pcs, second.pcs);
+    EXPECT_FALSE(first.pcs.empty());
+}
+
 // A deforming animation pruned frame by frame with a hierarchy cache: the PCS and every pass
 // are those of fresh builds (trap: a reused hierarchy that no longer matches the geometry), the
 // first frame builds and the later ones reuse, and a frame with other triangles rebuilds.

@@ -240,6 +240,11 @@ public:
     // `consumed`: the scene (the same object) may be emptied once the geometry is uploaded.
     Culler(const Scene& scene, DepthBackend& backend, const CullideOptions& opt, Scene* consumed = nullptr)
         : scene_(scene), backend_(backend), opt_(opt), consumed_(consumed) {}
+    ~Culler() {
+        if (lent_) backend_.borrowGeometry({}, {});  // the arrays die with this run
+    }
+    Culler(const Culler&) = delete;
+    Culler& operator=(const Culler&) = delete;
 
     CullideResult run() {
         const auto start = Clock::now();
@@ -336,7 +341,9 @@ private:
         }
         world = {};
         if (consumed_) *consumed_ = Scene{};  // scene_ is not read after build()
-        backend_.setGeometry(positions_, triangles_);
+        // Lent, not copied, where the backend can read it in place: positions_ and triangles_
+        // live and stay unchanged until the destructor takes them back.
+        lent_ = backend_.borrowGeometry(positions_, triangles_);
     }
 
     // The triangles of the given nodes, as (object, triangle) sorted.
@@ -552,6 +559,7 @@ private:
     DepthBackend& backend_;
     const CullideOptions& opt_;
     Scene* consumed_;
+    bool lent_ = false;  // the backend reads positions_ and triangles_ in place
     std::vector<Hierarchy> built_;  // without a cache: this run's hierarchies
     std::vector<const Hierarchy*> hierarchies_;  // per object: in built_ or in the cache
     std::vector<uint32_t> triangleOffset_;

@@ -102,7 +102,7 @@ public:
         windowValid_ = false;
     }
 
-    void borrowGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override {
+    bool borrowGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override {
         checkGeometry(positions, triangles);
         std::vector<Vec3f>().swap(ownedPositions_);
         std::vector<Triangle>().swap(ownedTriangles_);
@@ -110,6 +110,7 @@ public:
         triangles_ = triangles;
         borrowed_ = true;
         windowValid_ = false;
+        return true;
     }
 
     static void checkGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) {

@@ -189,6 +189,15 @@ public:
     // Geometry for the frame: the backend copies what it needs; the spans may die afterwards.
     // Indices must be < positions.size() (validated meshes guarantee it).
     virtual void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) = 0;
+    // setGeometry for a caller that keeps both arrays alive and unchanged until its next
+    // setGeometry or borrowGeometry (runCullide lends its own arrays for the run and takes them
+    // back with borrowGeometry({}, {}) before it returns). A backend that can read the geometry in
+    // place skips the copy and returns true (the CPU reference: 18 bytes per triangle of a
+    // prune's peak); the default copies (setGeometry) and returns false.
+    virtual bool borrowGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) {
+        setGeometry(positions, triangles);
+        return false;
+    }
 
     // The view for the following execute() calls (validated; throws InputError on a bad view).
     virtual void setView(const OrthoView& view) = 0;

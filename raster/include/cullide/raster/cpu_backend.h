@@ -81,10 +81,8 @@ public:
     // coordinates), keeping geometry, view and buffers; the next execute() allocates it again.
     // For a caller that runs something else large between lists (trace recording).
     virtual void releaseScratch() = 0;
-    // setGeometry without the copy: the caller keeps both arrays alive and unchanged until the
-    // next setGeometry, borrowGeometry or releaseScratch (which forgets them). For a caller that
-    // holds the geometry anyway (trace recording: the pipeline's arrays, during its run).
-    virtual void borrowGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) = 0;
+    // borrowGeometry (DepthBackend) reads the arrays in place and returns true; releaseScratch
+    // forgets them too. Trace recording lends the pipeline's arrays this way, during its run.
 };
 
 // Creates a CPU backend. Throws InputError("cpu backend options", ...) on options out of range.
