@@ -53,7 +53,7 @@ int runPrune(const PruneOptions& o) {
     const CullideOptions options = parseCullideOptions(o.cullide);
     const std::unique_ptr<DepthBackend> backend = raster::makeBackend(o.backend, o.threads);
 
-    const Animation animation = loadScene(o.scene);
+    Animation animation = loadScene(o.scene);
     const auto [first, last] = selectFrames(animation, o.frame, o.scene);
     if (!o.out.empty() && o.frame < 0 && animation.frameCount() > 1)
         throw InputError("option --out",
@@ -75,13 +75,17 @@ int runPrune(const PruneOptions& o) {
     // Over several frames, an object whose triangles do not change keeps its hierarchy (the same
     // PCS, bit for bit: hierarchy.h); one frame has nothing to reuse, so nothing is kept.
     std::shared_ptr<HierarchyCache> hierarchies;
+    nlohmann::ordered_json objectNames = nlohmann::ordered_json::array();
+    for (const Object& obj : animation.scene.objects) objectNames.push_back(obj.name);
     if (!o.rebuildHierarchy && last - first > 1) hierarchies = std::make_shared<HierarchyCache>();
     for (size_t f = first; f < last; ++f) {
         const size_t done = f - first;
         std::string frameName = "frame ";  // built stepwise: GCC 12's -Wrestrict on "..." + std::string
         frameName += std::to_string(f);
         bar.update(done, frameName);
-        const Scene scene = animation.sceneAt(f);
+        // A still scene pruned once is moved, not copied, out of the file's (peak memory).
+        Scene scene = last - first == 1 && animation.frames.empty() ? std::move(animation.scene) : animation.sceneAt(f);
+        const size_t total = scene.triangleCount(), objectCount = scene.objects.size();
         CullideOptions frameOptions = options;
         frameOptions.hierarchyCache = hierarchies;
         // Within a frame, per reducePCS call: a large scene's frame can take minutes. Set only when
@@ -112,12 +116,14 @@ int runPrune(const PruneOptions& o) {
                 pictures->write(pcs, std::filesystem::path(o.frames) / name);
             };
         }
-        const CullideResult r = runCullide(scene, *backend, frameOptions);
+        // Given up to the run (emptied once uploaded) unless something below reads it.
+        const bool sceneNeeded = o.check || o.exact || !o.out.empty() || pictures;
+        const CullideResult r = sceneNeeded ? runCullide(scene, *backend, frameOptions)
+                                            : runCullide(std::move(scene), *backend, frameOptions);
         size_t rendered = 0, queries = 0;
         for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
         std::map<uint32_t, size_t> perObject;
         for (const PcsTriangle& p : r.pcs) ++perObject[p.object];
-        const size_t total = scene.triangleCount();
         std::optional<study::Progress::Pause> pause;  // the lines below go to stdout
         pause.emplace(&bar);
         std::printf(
@@ -125,9 +131,9 @@ int runPrune(const PruneOptions& o) {
             "%zu triangles rendered, %zu queries; hierarchy %.1f ms%s, total %.1f ms\n",
             f, r.pcs.size(), total, total ? 100.0 * double(r.pcs.size()) / double(total) : 0.0, perObject.size(),
             r.levels, r.passes.size(), rendered, queries, 1e3 * r.hierarchySeconds,
-            r.hierarchiesReused == 0                          ? ""
-                : r.hierarchiesReused == scene.objects.size() ? " (reused)"
-                                                              : " (some reused)",
+            r.hierarchiesReused == 0                 ? ""
+                : r.hierarchiesReused == objectCount ? " (reused)"
+                                                     : " (some reused)",
             1e3 * r.totalSeconds);
         if (!o.json.empty()) {
             nlohmann::ordered_json pcs = nlohmann::ordered_json::array();
@@ -159,8 +165,6 @@ int runPrune(const PruneOptions& o) {
     }
     bar.finish();
     if (!o.json.empty()) {
-        nlohmann::ordered_json objects = nlohmann::ordered_json::array();
-        for (const Object& obj : animation.scene.objects) objects.push_back(obj.name);
         nlohmann::ordered_json j = {{"scene", o.scene},
                                     {"options",
                                      {{"method", toString(options.method)},
@@ -172,7 +176,7 @@ int runPrune(const PruneOptions& o) {
                                       {"leaf_size", options.hierarchy.leafSize},
                                       {"branching", options.hierarchy.branching},
                                       {"backend", backend->describe()}}},
-                                    {"objects", objects},
+                                    {"objects", objectNames},
                                     {"frames", frames}};
         for (const Vec3d& d : options.directions) j["options"]["directions"].push_back({d.x(), d.y(), d.z()});
         // Adaptive resolution: width x height is the smallest viewport; each pass has its own.
