@@ -121,6 +121,21 @@ void appendModifiedReducePcs(CommandList& list, std::span<const TriangleRange> r
     }
 }
 
+namespace {
+
+// The ranges cut into pieces of at most kPiece triangles: the unit of the parallel loops over a
+// call's triangles. The pieces depend on the ranges only, so a reduction over them in piece order
+// does not depend on the thread count.
+constexpr uint32_t kPiece = 4096;
+std::vector<TriangleRange> piecesOf(std::span<const TriangleRange> ranges) {
+    std::vector<TriangleRange> pieces;
+    for (const TriangleRange& r : ranges)
+        for (uint32_t k = 0; k < r.count; k += kPiece) pieces.push_back({r.first + k, std::min(kPiece, r.count - k)});
+    return pieces;
+}
+
+}  // namespace
+
 OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
                   std::span<const TriangleRange> ranges, const Vec3d& dir, int width, int height,
                   const DepthFormat& depth) {
@@ -128,16 +143,26 @@ OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> tr
     view.width = width;
     view.height = height;
     view.depth = depth;
+    // The bounds in the view's frame, per piece in parallel (levels 0-2 fit the whole mesh: 4-6%
+    // of a prune on one thread); min and max are exact, so the result is the same for any split.
     constexpr double inf = std::numeric_limits<double>::infinity();
+    const std::vector<TriangleRange> pieces = piecesOf(ranges);
+    std::vector<std::pair<Vec3d, Vec3d>> bounds(pieces.size());
+    parallelFor(0, pieces.size(), 1, [&](const auto& block) {
+        for (size_t i = block.begin(); i != block.end(); ++i) {
+            Vec3d lo(inf, inf, inf), hi(-inf, -inf, -inf);
+            for (uint32_t t = pieces[i].first; t < pieces[i].first + pieces[i].count; ++t)
+                for (uint32_t v : triangles[t]) {
+                    const Vec3d p = positions[v].cast<double>();
+                    const Vec3d q(view.right.dot(p), view.up.dot(p), view.dir.dot(p));
+                    lo = lo.cwiseMin(q);
+                    hi = hi.cwiseMax(q);
+                }
+            bounds[i] = {lo, hi};
+        }
+    });
     Vec3d lo(inf, inf, inf), hi(-inf, -inf, -inf);
-    for (const TriangleRange& r : ranges)
-        for (uint32_t t = r.first; t < r.first + r.count; ++t)
-            for (uint32_t v : triangles[t]) {
-                const Vec3d p = positions[v].cast<double>();
-                const Vec3d q(view.right.dot(p), view.up.dot(p), view.dir.dot(p));
-                lo = lo.cwiseMin(q);
-                hi = hi.cwiseMax(q);
-            }
+    for (const auto& [l, h] : bounds) lo = lo.cwiseMin(l), hi = hi.cwiseMax(h);
     if (!(lo.x() <= hi.x())) lo = hi = Vec3d::Zero();  // nothing to fit: any valid view will do
 
     // Square pixels: the pixel size that fits both extents; the box centred on the bounds.
@@ -175,10 +200,7 @@ std::pair<int, int> adaptiveViewport(std::span<const Vec3f> positions, std::span
     struct ProjectedBox {
         double area, xlo, xhi, ylo, yhi;
     };
-    constexpr uint32_t kPiece = 4096;
-    std::vector<TriangleRange> pieces;
-    for (const TriangleRange& r : ranges)
-        for (uint32_t k = 0; k < r.count; k += kPiece) pieces.push_back({r.first + k, std::min(kPiece, r.count - k)});
+    const std::vector<TriangleRange> pieces = piecesOf(ranges);
     constexpr double inf = std::numeric_limits<double>::infinity();
     std::vector<ProjectedBox> perPiece(pieces.size(), ProjectedBox{0, inf, -inf, inf, -inf});
     parallelFor(0, pieces.size(), 1, [&](const auto& block) {
