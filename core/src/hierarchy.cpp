@@ -64,11 +64,16 @@ uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
 // A triangle with more than three neighbours (on a non-manifold edge) has slot 0 = kEscape and
 // its neighbours' triangle ids in overflow_ (slots 1, 2: offset and count), found through posOf_
 // (triangle id -> position) and tested against the range.
+// The build's arrays: written before they are read, and mapped with pages of their own, so that
+// the scratch a parallel subtree frees goes back to the system (cullide/unwritten.h).
+template <typename T>
+using Pages = UnwrittenVector<T, true>;
+
 // What one thread's splits write besides the shared arrays, indexed from the start of the range
 // being split: queue (breadth-first order, then the new order), tmp (pieces, then triangle ids),
 // tmpSlots (rebuilt rows, 3 each), and the small stacks.
 struct Scratch {
-    UnwrittenVector<uint32_t> queue, tmp, tmpSlots;
+    Pages<uint32_t> queue, tmp, tmpSlots;
     std::vector<uint32_t> sizes, pieceStart;
     std::vector<uint8_t> moved;
 
@@ -130,7 +135,7 @@ private:
         for (const Triangle& tri : mesh_.triangles)
             for (uint32_t v : tri) ++vstart[v + 1];
         for (size_t v = 0; v < nv; ++v) vstart[v + 1] += vstart[v];
-        UnwrittenVector<uint32_t> incident(vstart[nv]);
+        Pages<uint32_t> incident(vstart[nv]);
         // Fill by advancing each vertex's start to its end, then shift the starts back: no array
         // of cursors.
         for (uint32_t t = 0; t < n; ++t)
@@ -408,7 +413,7 @@ private:
     // (labels during a bisection, then old -> new position). By triangle id, only when some row
     // overflows: posOf_. slots_ and mark_ start unwritten (cullide/unwritten.h; zeroing the
     // arrays of n or 3n entries was 12% of a 1M build).
-    UnwrittenVector<uint32_t> slots_, mark_;
+    Pages<uint32_t> slots_, mark_;
     std::vector<uint32_t> overflow_, posOf_;
 };
 

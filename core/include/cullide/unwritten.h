@@ -8,14 +8,16 @@
 // construct() below), so the loop that fills the array touches its fresh pages first, in parallel
 // where it is parallel.
 //
-// From 256 KiB on, an array maps its own pages (mmap), which go back to the system when it is
-// freed, whatever malloc's heuristics: an array of a few MiB freed from malloc's heap raises
-// glibc's mmap threshold, and later ones then stay resident in the heap after they are freed (a
-// parallel hierarchy build whose subtrees freed their scratch that way raised `prune`'s 1M peak by
-// 20 MB). From 2 MiB on, the array is also 2 MiB aligned and asks for transparent huge pages
-// (MADV_HUGEPAGE, advice only: no error if refused): one page fault per 2 MiB instead of one per
-// 4 KiB when it is first written (4 KiB faults were a fifth of the 1M oracle's time). Only whole
-// 2 MiB pages inside the array are advised, so its memory use stays the same.
+// From 2 MiB on, an array is 2 MiB aligned and asks for transparent huge pages (MADV_HUGEPAGE,
+// advice only: no error if refused): one page fault per 2 MiB instead of one per 4 KiB when it is
+// first written (4 KiB faults were a fifth of the 1M oracle's time). Only whole 2 MiB pages inside
+// the array are advised, so its memory use stays the same.
+//
+// An array may also map its own pages from 256 KiB on (kOwnPages), which go back to the system
+// when it is freed, whatever malloc's heuristics: an array of a few MiB freed from malloc's heap
+// raises glibc's mmap threshold, and later ones then stay resident in the heap after they are
+// freed (the parallel hierarchy build, whose subtrees free their scratch, raised `prune`'s 1M
+// peak by 20 MB that way).
 #pragma once
 
 #include <sys/mman.h>
@@ -30,7 +32,11 @@
 
 namespace cullide {
 
-template <typename T>
+// kOwnPages: from 256 KiB on, the array maps its own pages (see above). Without it, a large array
+// comes from malloc like any other, whose freed memory serves the next call at once: the right
+// choice for arrays that a loop allocates again and again (the oracle's, called per mesh: mapping
+// them anew each call made its setup 10x slower on 5k-50k meshes).
+template <typename T, bool kOwnPages = false>
 struct UnwrittenAllocator {
 private:
     static size_t mappedBytes(size_t bytes) { return (bytes + 4095) & ~size_t(4095); }
@@ -43,12 +49,16 @@ public:
     // Under AddressSanitizer every array comes from its heap, whose redzones catch an overrun.
     static constexpr size_t kMapped = std::numeric_limits<size_t>::max();
 #else
-    static constexpr size_t kMapped = size_t(256) << 10;  // from here on, pages of its own
+    static constexpr size_t kMapped = kOwnPages ? size_t(256) << 10 : std::numeric_limits<size_t>::max();
 #endif
+    template <typename U>
+    struct rebind {
+        using other = UnwrittenAllocator<U, kOwnPages>;
+    };
 
     UnwrittenAllocator() = default;
     template <typename U>
-    UnwrittenAllocator(const UnwrittenAllocator<U>&) noexcept {}
+    UnwrittenAllocator(const UnwrittenAllocator<U, kOwnPages>&) noexcept {}
 
     T* allocate(size_t n) {
         if (n > max_size()) throw std::bad_array_new_length();
@@ -97,12 +107,12 @@ public:
         else ::new (static_cast<void*>(p)) U{std::forward<Args>(args)...};
     }
     template <typename U>
-    bool operator==(const UnwrittenAllocator<U>&) const noexcept {
+    bool operator==(const UnwrittenAllocator<U, kOwnPages>&) const noexcept {
         return true;
     }
 };
 
-template <typename T>
-using UnwrittenVector = std::vector<T, UnwrittenAllocator<T>>;
+template <typename T, bool kOwnPages = false>
+using UnwrittenVector = std::vector<T, UnwrittenAllocator<T, kOwnPages>>;
 
 }  // namespace cullide
