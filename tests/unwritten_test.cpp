@@ -14,13 +14,16 @@ using cullide::UnwrittenVector;
 // Trap: the allocator asks for over-aligned storage itself: each array must keep its type's
 // alignment (the oracle's 64-byte primitive records), and one of 2 MiB or more (huge pages
 // advised) must start on a 2 MiB boundary and be writable to its end; freeing must use the same
-// alignment it was allocated with (ASan reports a mismatch).
-TEST(Unwritten, KeepsAlignment) {
+// alignment (ASan reports a mismatch) or unmap exactly what was mapped.
+// Both kinds: from malloc, and with pages of their own (mapped, then the unaligned head and tail
+// of the mapping unmapped again).
+template <bool kOwnPages>
+void expectAligned() {
     struct alignas(64) Record {
         float x[16];
     };
-    for (size_t n : {size_t(0), size_t(1), size_t(1000), size_t(40000)}) {
-        UnwrittenVector<Record> b(n);
+    for (size_t n : {size_t(0), size_t(1), size_t(1000), size_t(5000), size_t(40000)}) {
+        UnwrittenVector<Record, kOwnPages> b(n);
         EXPECT_EQ(b.size(), n);
         EXPECT_EQ(reinterpret_cast<uintptr_t>(b.data()) % 64, 0u);
         if (n * sizeof(Record) >= (size_t(2) << 20)) {
@@ -31,9 +34,14 @@ TEST(Unwritten, KeepsAlignment) {
             EXPECT_EQ(b[n - 1].x[15], float(n - 1));
         }
     }
-    UnwrittenVector<uint64_t> moved(5000);
+    UnwrittenVector<uint64_t, kOwnPages> moved(500000);
     moved = {};
     EXPECT_EQ(moved.size(), 0u);
+}
+
+TEST(Unwritten, KeepsAlignment) {
+    expectAligned<false>();
+    expectAligned<true>();
 }
 
 // Trap: only growing without a value is left unwritten. A value given (resize(n, v), push_back,
