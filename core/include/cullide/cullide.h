@@ -16,7 +16,8 @@
 //     tightly to the triangles of the current PCS: x/y to their projected bounds with square
 //     pixels (the longer side fills the viewport, the box centred), near/far to their depth
 //     extent (plus two depth units at each end). A PCS that is flat along d, or a point, gets a
-//     tiny box around it so the view stays valid.
+//     tiny box around it so the view stays valid. With ViewMode::Clustered, one such view per
+//     group of nodes whose projections overlap (viewGroups), each with its own command list.
 //   - A node is pruned by one reducePCS call (one direction) when it is fully visible in both the
 //     forward and the reverse pass (the paper's Lemma 3.2): its queries passed no fragment.
 //   - The loop (Figure 1): start from the objects' roots; for each level, run reducePCS once per
