@@ -10,6 +10,13 @@
 //     triangles, reducePCS calls, triangles rendered, queries, levels 0-2's time and triangle
 //     rate (the whole mesh drawn), and on the 270k modified runs on one thread x_90b80f8 (commit
 //     90b80f8's CPU time over this run's).
+//   BM_Views/<scene>/<res>/<views>: one prune (modified) with one fitted view per call (views 0,
+//     fit) or one per group of overlapping nodes (views 1, clustered;
+//     docs/cullide.md#views-per-cluster); scene 0 = data/scenes/two_cows_and_bunny.json, 1 = 64
+//     cylinders of about 100k triangles (make-scene cylinders --count 64 --triangles 100000,
+//     seed 1); res 0 = 500 x 500, 1 = `--resolution auto`. Counters: PCS triangles, reducePCS
+//     calls, the most views of a call, and on clustered runs x_fit, this run's time over the fit
+//     run's of the same scene and resolution (run just before it).
 //   BM_Hierarchy/<kind>/<triangles>: building one object's hierarchy (the per-frame cost the
 //     paper's method pays instead of preprocessing); kind 0 = connectivity, 1 = random. Wall
 //     time: nodes of 2^16 triangles and more build their subtrees in parallel. Counters:
@@ -20,11 +27,13 @@
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
 #include "cullide/raster/cpu_backend.h"
+#include "cullide/scene_io.h"
 
 #include "bench_util.h"
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <ctime>
@@ -95,6 +104,39 @@ void BM_Prune(benchmark::State& state) {
 BENCHMARK(BM_Prune)
     ->ArgNames({"scene", "tris", "method", "threads"})
     ->ArgsProduct({{0, 1}, {5000, 270000}, {0, 1, 2}, {1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+const Scene& viewsScene(int which) {
+    static const Scene cows = loadScene(std::string(CULLIDE_DATA_DIR) + "/scenes/two_cows_and_bunny.json").sceneAt(0);
+    static const Scene cylinders = makeCylinders(64, {100000, 1, 0}).scene;
+    return which == 0 ? cows : cylinders;
+}
+
+void BM_Views(benchmark::State& state) {
+    const Scene& scene = viewsScene(int(state.range(0)));
+    auto backend = raster::makeCpuBackend();
+    CullideOptions o;
+    if (state.range(1) == 1) o.autoCoverage = kDefaultAutoCoverage;
+    o.views = state.range(2) == 0 ? ViewMode::Fit : ViewMode::Clustered;
+    CullideResult r;
+    const auto begin = std::chrono::steady_clock::now();
+    for (auto _ : state) r = runCullide(scene, *backend, o);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count() /
+        double(state.iterations());
+    static std::map<std::pair<int64_t, int64_t>, double> fitMs;  // by (scene, res)
+    const std::pair<int64_t, int64_t> key{state.range(0), state.range(1)};
+    if (o.views == ViewMode::Fit) fitMs[key] = ms;
+    else if (fitMs.count(key)) state.counters["x_fit"] = ms / fitMs[key];
+    uint32_t views = 0;
+    for (const PassStats& p : r.passes) views = std::max(views, p.views);
+    state.counters["pcs"] = double(r.pcs.size());
+    state.counters["calls"] = double(r.passes.size());
+    state.counters["views_max"] = double(views);
+}
+BENCHMARK(BM_Views)
+    ->ArgNames({"scene", "res", "views"})
+    ->ArgsProduct({{0, 1}, {0, 1}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

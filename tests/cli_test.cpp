@@ -189,6 +189,7 @@ TEST(Cli, PruneRefusesBadOptions) {
         {"--directions 0", "--directions"},
         {"--method reliable-ish", "--method"},
         {"--hierarchy octree", "--hierarchy"},
+        {"--views clusters", "--views"},
         {"--leaf-size 0", "--leaf-size"},
         {"--branching 1", "--branching"},
         {"--threads -1", "--threads"},
@@ -274,6 +275,41 @@ TEST(Cli, PruneJsonAndPly) {
     EXPECT_NE(ply.find("property uchar red"), std::string::npos);
 }
 
+// --views (docs/cullide.md#views-per-cluster). Traps: a default run whose JSON changes (fit records
+// no "views", as before the option), a clustered run that does not say so in its options and per
+// call, and a study that drops the axis from its CSV (the ids: Study.RunIdsAreStableAndDistinct).
+TEST(Cli, ViewsInPruneJsonAndStudy) {
+    const fs::path d = freshDir("views");
+    const std::string scene = quote(kData + "/scenes/two_cows_and_bunny.json");
+    for (const char* views : {"fit", "clustered"}) {
+        const std::string json = (d / (std::string(views) + ".json")).string();
+        const CliRun r = runCli("prune " + scene + " --resolution 64 --views " + views + " --json " + quote(json));
+        ASSERT_EQ(r.status, 0) << r.output;
+        const auto j = nlohmann::json::parse(readAll(json));
+        const bool clustered = std::string(views) == "clustered";
+        EXPECT_EQ(j.at("options").contains("views"), clustered) << views;
+        if (clustered) {
+            EXPECT_EQ(j["options"]["views"], "clustered");
+        }
+        size_t most = 0;
+        for (const auto& p : j.at("frames").at(0).at("passes")) {
+            EXPECT_EQ(p.contains("views"), clustered) << views;
+            if (clustered) most = std::max(most, p.at("views").get<size_t>());
+        }
+        if (clustered) {
+            EXPECT_GT(most, 1u) << "the two cows and the bunny's contacts should split";
+        }
+    }
+    const std::string csv = (d / "s.csv").string();
+    const CliRun st = runCli(
+        "study --scenes cows:600 --resolutions 64 --views fit clustered --repeats 1 --no-oracle -q -o " + quote(csv));
+    ASSERT_EQ(st.status, 0) << st.output;
+    const std::string text = readAll(csv);
+    EXPECT_NE(text.find(",views,"), std::string::npos) << text;
+    EXPECT_NE(text.find(",fit,"), std::string::npos) << text;
+    EXPECT_NE(text.find(",clustered,"), std::string::npos) << text;
+}
+
 // prune over every frame keeps each object's hierarchy while its triangles are unchanged, and
 // --rebuild-hierarchy builds them every frame as the paper does. Traps: a reused hierarchy that
 // changes the PCS or a pass; a cache that never reuses (hierarchies_reused stays 0).
@@ -314,7 +350,7 @@ TEST(Cli, PruneReusesHierarchiesAcrossFrames) {
 TEST(Cli, StudySpecMutationsAreRefusedByName) {
     const fs::path d = freshDir("spec");
     const nlohmann::json valid = nlohmann::json::parse(R"({"scenes": ["bunny:500"], "methods": ["modified"],
-        "resolutions": [64], "depths": [16], "directions": ["axes"], "hierarchies": ["connectivity"],
+        "resolutions": [64], "depths": [16], "directions": ["axes"], "views": ["fit"], "hierarchies": ["connectivity"],
         "leaf_sizes": [16], "backends": ["cpu"], "threads": [1], "branching": 4, "seed": 1, "repeats": 1,
         "oracle": false})");
     auto run = [&](const nlohmann::json& spec) {

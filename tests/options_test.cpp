@@ -67,7 +67,7 @@ TEST(Options, EveryFieldIsParsed) {
 TEST(Options, ErrorsNameTheFieldAsTyped) {
     OptionNames names;
     names.method = "M", names.resolution = "R", names.depth = "D", names.directions = "V", names.hierarchy = "H";
-    names.leafSize = "L", names.branching = "B";
+    names.leafSize = "L", names.branching = "B", names.views = "W";
     const struct {
         void (*bad)(OptionText&);
         const char* name;
@@ -94,6 +94,9 @@ TEST(Options, ErrorsNameTheFieldAsTyped) {
         {[](OptionText& t) { t.directions = "0 0 0"; }, "V: "},
         {[](OptionText& t) { t.directions = ""; }, "V: "},
         {[](OptionText& t) { t.hierarchy = "octree"; }, "H: "},
+        {[](OptionText& t) { t.views = "Fit"; }, "W: "},  // case matters, as for the method
+        {[](OptionText& t) { t.views = "cluster"; }, "W: "},
+        {[](OptionText& t) { t.views = ""; }, "W: "},
         {[](OptionText& t) { t.leafSize = 0; }, "L: "},
         {[](OptionText& t) { t.leafSize = kMaxLeafSize + 1; }, "L: "},
         {[](OptionText& t) { t.branching = 1; }, "B: "},
@@ -108,6 +111,20 @@ TEST(Options, ErrorsNameTheFieldAsTyped) {
         EXPECT_EQ(m.find("option --"), std::string::npos) << m;
         EXPECT_EQ(m.find("depth format:"), std::string::npos) << m;
     }
+}
+
+// Trap: a view mode that parses to the wrong enum, or a default other than fit (the paper's one
+// view per call, bit for bit what prune gave before the option).
+TEST(Options, ViewModes) {
+    OptionText t;
+    EXPECT_EQ(parseCullideOptions(t).views, ViewMode::Fit);
+    t.views = "clustered";
+    EXPECT_EQ(parseCullideOptions(t).views, ViewMode::Clustered);
+    t.views = "fit";
+    EXPECT_EQ(parseCullideOptions(t).views, ViewMode::Fit);
+    EXPECT_STREQ(toString(ViewMode::Clustered), "clustered");
+    const std::string m = messageOf([] { parseViewMode("all"); });
+    EXPECT_EQ(m, "option --views: unknown view mode 'all' (expected fit or clustered)");
 }
 
 // Trap: "auto" read as a viewport (sscanf of "auto" fails, but "auto:4" must not become 4x4), or

@@ -72,6 +72,17 @@ TEST(Study, RunIdsAreStableAndDistinct) {
     EXPECT_EQ(ids.size(), all.size());
     EXPECT_EQ(all[0].key(), "cows:800|0|original|64|16|axes|connectivity|16|4|1|cpu|0");
     EXPECT_EQ(all[0].id(), "e0aa55aee0e7e225");
+    // The views axis: fit keeps the key (and id) it had before the axis, so that resuming an older
+    // study does not redo its runs; clustered is another run.
+    Spec v = smallSpec();
+    v.views = {"fit", "clustered"};
+    const std::vector<RunConfig> both = expand(v);
+    ASSERT_EQ(both.size(), 2 * all.size());
+    EXPECT_EQ(both[0].id(), all[0].id());
+    EXPECT_EQ(both[1].views, "clustered");
+    EXPECT_EQ(both[1].key(), all[0].key() + "|views=clustered");
+    v.views = {"cluster"};
+    EXPECT_THROW(expand(v), InputError);
 }
 
 // Trap: shards each compute their own oracle and backend; anything that leaks between runs (a

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <tuple>
 
 namespace cullide {
@@ -40,6 +41,20 @@ CullMethod parseCullMethod(const std::string& text) {
     if (text == "modified") return CullMethod::Modified;
     if (text == "reliable") return CullMethod::Reliable;
     throw InputError("option --method", "unknown method '" + text + "' (expected original, modified or reliable)");
+}
+
+const char* toString(ViewMode m) {
+    switch (m) {
+        case ViewMode::Fit: return "fit";
+        case ViewMode::Clustered: return "clustered";
+    }
+    return "?";
+}
+
+ViewMode parseViewMode(const std::string& text) {
+    if (text == "fit") return ViewMode::Fit;
+    if (text == "clustered") return ViewMode::Clustered;
+    throw InputError("option --views", "unknown view mode '" + text + "' (expected fit or clustered)");
 }
 
 bool promisesToKeep(CullMethod method, bool crossing, bool sameObject) {
@@ -249,6 +264,78 @@ std::pair<int, int> adaptiveViewport(std::span<const Vec3f> positions, std::span
     return {int(w), int(h)};
 }
 
+std::vector<std::vector<uint32_t>> viewGroups(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                                              std::span<const TriangleRange> ranges, const Vec3d& dir) {
+    const OrthoView frame = OrthoView::looking(dir);
+    const size_t n = ranges.size();
+    // Each item's projected rectangle, closed. Two triangles that share a point p have p's exact
+    // projection inside both exact rectangles; the computed ones differ from those by the dot
+    // products' rounding, a few units in the last place of |p|, far below the 1e-9 * |p|_1 added
+    // on every side: so touching items always overlap here. Snapping and conservative dilation
+    // need nothing: the argument is about the triangles themselves, not their images.
+    struct Rect {
+        double xlo, xhi, ylo, yhi;
+    };
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    std::vector<Rect> rect(n, Rect{inf, -inf, inf, -inf});
+    parallelFor(0, n, 1, [&](const auto& block) {
+        for (size_t i = block.begin(); i != block.end(); ++i) {
+            Rect& r = rect[i];
+            double scale = 0;
+            for (uint32_t t = ranges[i].first; t < ranges[i].first + ranges[i].count; ++t)
+                for (uint32_t v : triangles[t]) {
+                    const Vec3d p = positions[v].cast<double>();
+                    const double x = frame.right.dot(p), y = frame.up.dot(p);
+                    r.xlo = std::min(r.xlo, x), r.xhi = std::max(r.xhi, x);
+                    r.ylo = std::min(r.ylo, y), r.yhi = std::max(r.yhi, y);
+                    scale = std::max(scale, p.cwiseAbs().sum());
+                }
+            const double eps = 1e-9 * scale;
+            r.xlo -= eps, r.xhi += eps, r.ylo -= eps, r.yhi += eps;
+        }
+    });
+    // Connected components of overlap: a sweep in increasing xlo (ties by index) keeps the items
+    // whose x extent reaches the current one and unites those whose y extents meet it too.
+    std::vector<uint32_t> order(n), parent(n);
+    std::iota(order.begin(), order.end(), 0u);
+    std::iota(parent.begin(), parent.end(), 0u);
+    std::sort(order.begin(), order.end(),
+              [&](uint32_t a, uint32_t b) { return std::tie(rect[a].xlo, a) < std::tie(rect[b].xlo, b); });
+    auto find = [&](uint32_t a) {
+        while (parent[a] != a) a = parent[a] = parent[parent[a]];
+        return a;
+    };
+    std::vector<uint32_t> active;
+    for (uint32_t i : order) {
+        const Rect& r = rect[i];
+        if (!(r.xlo <= r.xhi)) continue;  // an empty item: a group of its own
+        size_t keep = 0;
+        for (uint32_t a : active) {
+            if (rect[a].xhi < r.xlo) continue;  // ends before every item still to come
+            active[keep++] = a;
+            if (rect[a].ylo <= r.yhi && r.ylo <= rect[a].yhi) {
+                const uint32_t ra = find(a), ri = find(i);
+                if (ra != ri) parent[std::max(ra, ri)] = std::min(ra, ri);
+            }
+        }
+        active.resize(keep);
+        active.push_back(i);
+    }
+    // Roots are each group's smallest index, so numbering the groups in index order numbers them
+    // by their first item.
+    std::vector<std::vector<uint32_t>> groups;
+    std::vector<uint32_t> groupOf(n);
+    for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t root = find(i);
+        if (root == i) {
+            groupOf[i] = uint32_t(groups.size());
+            groups.emplace_back();
+        }
+        groups[groupOf[root]].push_back(i);
+    }
+    return groups;
+}
+
 namespace {
 
 // One node of the PCS: an object's hierarchy node, and its triangles in the uploaded geometry.
@@ -436,6 +523,18 @@ private:
     std::vector<Item> reduceReliable(const std::vector<Item>& pcs, uint32_t level, uint32_t d,
                                      std::vector<PassStats>& passes) {
         const auto start = Clock::now();
+        // A unit alone in its view has no unit to be tested against: it stays for its exact pairs only.
+        std::vector<Item> kept = byViews(
+            pcs, d, [&](const std::vector<Item>& units) { return testUnits(units, d); },
+            [&](const std::vector<Item>& units) {
+                return units.size() == 1 ? std::vector<uint8_t>{exactHit_[units[0].object][units[0].node]}
+                                         : std::vector<uint8_t>{};
+            });
+        return finishCall(pcs, std::move(kept), level, d, start, passes);
+    }
+
+    // One reliable view: which of `pcs` stay (a conflict or an exact pair).
+    std::vector<uint8_t> testUnits(const std::vector<Item>& pcs, uint32_t d) {
         ranges_.clear();
         for (const Item& it : pcs) ranges_.push_back(it.range);
         setView(d);
@@ -488,10 +587,10 @@ private:
         std::vector<uint8_t> conflict(n, 0);
         for (const auto& [u, q] : queries) conflict[u] |= results[q] > 0 ? 1 : 0;
 
-        std::vector<Item> kept;
-        for (uint32_t u = 0; u < n; ++u)
-            if (conflict[u] || exactHit_[pcs[u].object][pcs[u].node]) kept.push_back(pcs[u]);
-        return finishCall(pcs, std::move(kept), level, d, Command::Op::DrawConservative, start, passes);
+        std::vector<uint8_t> stays(n);
+        for (uint32_t u = 0; u < n; ++u) stays[u] = conflict[u] || exactHit_[pcs[u].object][pcs[u].node];
+        countView(Command::Op::DrawConservative);
+        return stays;
     }
 
     // The view of a call in direction d on ranges_: fitted at the fixed viewport, or at the one
@@ -505,9 +604,72 @@ private:
         backend_.setView(view_);
     }
 
+    // The nodes of `pcs` that stay after a call in direction d, in `pcs` order. With one view
+    // (ViewMode::Fit, or a single group) `test(pcs)` draws them all, as the paper does. Otherwise
+    // each group of viewGroups is drawn on its own by `test(group)`, with its own fitted view and
+    // command list, unless `undrawn(group)` already says which of its nodes stay (non-empty).
+    // Why that keeps every method's promise: the triangles of nodes in different groups have
+    // disjoint projections in the call's frame, so no two of them cross or touch; whatever a
+    // method promises is about such pairs, and each group's call is a call of the method on a PCS
+    // of its own (any view will do: docs/cullide.md#views-per-cluster).
+    template <typename Test, typename Undrawn>
+    std::vector<Item> byViews(const std::vector<Item>& pcs, uint32_t d, Test&& test, Undrawn&& undrawn) {
+        views_ = {};
+        std::vector<std::vector<uint32_t>> groups;
+        if (opt_.views == ViewMode::Clustered && pcs.size() > 1) {
+            ranges_.clear();
+            for (const Item& it : pcs) ranges_.push_back(it.range);
+            groups = viewGroups(positions_, triangles_, ranges_, opt_.directions[d]);
+        }
+        std::vector<uint8_t> stays;
+        if (groups.size() <= 1) {
+            stays = test(pcs);
+        } else {
+            stays.assign(pcs.size(), 0);
+            std::vector<Item> group;
+            for (const std::vector<uint32_t>& members : groups) {
+                group.clear();
+                for (uint32_t i : members) group.push_back(pcs[i]);
+                std::vector<uint8_t> s = undrawn(group);
+                if (s.empty()) s = test(group);
+                for (size_t k = 0; k < members.size(); ++k) stays[members[k]] = s[k];
+            }
+        }
+        std::vector<Item> kept;
+        for (size_t i = 0; i < pcs.size(); ++i)
+            if (stays[i]) kept.push_back(pcs[i]);
+        return kept;
+    }
+
+    // Adds the view just executed (view_, list_) to the call's totals.
+    void countView(Command::Op drawOp) {
+        for (const Command& c : list_.commands())
+            if (c.op == drawOp) views_.rendered += c.count;
+        views_.queries += list_.queryCount();
+        if (views_.count == 0 || int64_t(view_.width) * view_.height > int64_t(views_.width) * views_.height)
+            views_.width = view_.width, views_.height = view_.height;
+        ++views_.count;
+    }
+
     // One reducePCS call in direction d: returns the nodes that stay.
     std::vector<Item> reduce(const std::vector<Item>& pcs, uint32_t level, uint32_t d, std::vector<PassStats>& passes) {
         const auto start = Clock::now();
+        // The original method tests a node against the other objects only: in a view of one
+        // object's nodes every node is fully visible, pruned without drawing. The modified method
+        // tests a node against itself too, so even a lone node is drawn.
+        std::vector<Item> kept = byViews(
+            pcs, d, [&](const std::vector<Item>& nodes) { return testNodes(nodes, d); },
+            [&](const std::vector<Item>& nodes) {
+                const bool oneObject = std::all_of(nodes.begin(), nodes.end(),
+                                                   [&](const Item& it) { return it.object == nodes[0].object; });
+                return opt_.method == CullMethod::Original && oneObject ? std::vector<uint8_t>(nodes.size(), 0)
+                                                                        : std::vector<uint8_t>{};
+            });
+        return finishCall(pcs, std::move(kept), level, d, start, passes);
+    }
+
+    // One view of a modified or original call: which of `pcs` stay (not fully visible).
+    std::vector<uint8_t> testNodes(const std::vector<Item>& pcs, uint32_t d) {
         ranges_.clear();
         for (const Item& it : pcs) ranges_.push_back(it.range);
         setView(d);
@@ -546,18 +708,19 @@ private:
         }
 
         const std::vector<uint64_t> results = backend_.execute(list_);
-        std::vector<Item> kept;
+        std::vector<uint8_t> stays(pcs.size());
         for (size_t i = 0; i < pcs.size(); ++i) {
             const bool fullyVisible = results[forwardQuery[i]] == 0 && results[reverseQuery[i]] == 0;
-            if (!fullyVisible) kept.push_back(pcs[i]);
+            stays[i] = !fullyVisible;
         }
-        return finishCall(pcs, std::move(kept), level, d, Command::Op::Draw, start, passes);
+        countView(Command::Op::Draw);
+        return stays;
     }
 
-    // The statistics of one reducePCS call from `pcs` to `kept` (triangles rendered: those of the
-    // list's `drawOp` commands), appended to `passes` and reported to onPass and onPassStats. Returns `kept`.
+    // The statistics of one reducePCS call from `pcs` to `kept` (its views' totals, views_),
+    // appended to `passes` and reported to onPass and onPassStats. Returns `kept`.
     std::vector<Item> finishCall(const std::vector<Item>& pcs, std::vector<Item> kept, uint32_t level, uint32_t d,
-                                 Command::Op drawOp, Clock::time_point start, std::vector<PassStats>& passes) {
+                                 Clock::time_point start, std::vector<PassStats>& passes) {
         PassStats st;
         st.level = level;
         st.direction = d;
@@ -565,10 +728,11 @@ private:
         for (const Item& it : pcs) st.trianglesIn += it.range.count;
         st.nodesOut = kept.size();
         for (const Item& it : kept) st.trianglesOut += it.range.count;
-        for (const Command& c : list_.commands())
-            if (c.op == drawOp) st.trianglesRendered += c.count;
-        st.queries = list_.queryCount();
-        st.width = view_.width, st.height = view_.height;
+        st.trianglesRendered = views_.rendered;
+        st.queries = views_.queries;
+        // No view drawn (every group was decided undrawn): the base viewport.
+        st.width = views_.count ? views_.width : opt_.width, st.height = views_.count ? views_.height : opt_.height;
+        st.views = views_.count;
         st.round = round_;
         st.seconds = secondsSince(start);
         passes.push_back(st);
@@ -589,7 +753,13 @@ private:
     std::vector<Triangle> triangles_;
     std::vector<TriangleRange> ranges_;
     CommandList list_;
-    OrthoView view_;  // the current call's
+    OrthoView view_;  // the current view's
+    // The current call's views so far: triangles rendered, queries, the largest viewport, count.
+    struct ViewTotals {
+        size_t rendered = 0, queries = 0;
+        int width = 0, height = 0;
+        uint32_t count = 0;
+    } views_;
     uint32_t round_ = 0;  // reliable with adaptive resolution: the current round of calls
     std::vector<std::vector<uint8_t>> exactHit_;  // reliable: per object and node, an exact pair may intersect
 };

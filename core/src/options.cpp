@@ -107,6 +107,7 @@ CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& na
     o.depth = named(names.depth, [&] { return DepthFormat::parse(text.depth); });
     o.directions = parseDirections(text.directions, names.directions);
     o.hierarchy.kind = named(names.hierarchy, [&] { return parseHierarchyKind(text.hierarchy); });
+    o.views = named(names.views, [&] { return parseViewMode(text.views); });
     if (text.leafSize < 1 || text.leafSize > kMaxLeafSize)
         throw InputError(names.leafSize,
                          std::to_string(text.leafSize) + ": the leaf size must be 1 to " +

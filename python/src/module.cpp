@@ -180,6 +180,7 @@ OptionNames pythonNames() {
     n.hierarchy = "argument hierarchy";
     n.leafSize = "argument leaf_size";
     n.branching = "argument branching";
+    n.views = "argument views";
     return n;
 }
 
@@ -209,13 +210,14 @@ std::unique_ptr<DepthBackend> makeBackendChecked(const std::string& name, int th
 
 PyResult prune(const PyScene& s, const std::string& method, const py::object& resolution, const std::string& depth,
                const std::string& directions, const std::string& hierarchy, long long leafSize, long long branching,
-               long long seed, const std::string& backendName, int threads, long frame) {
+               long long seed, const std::string& backendName, int threads, long frame, const std::string& views) {
     OptionText text;
     text.method = method;
     text.resolution = resolutionText(resolution);
     text.depth = depth;
     text.directions = directions;
     text.hierarchy = hierarchy;
+    text.views = views;
     text.leafSize = checkedCount(leafSize, "argument leaf_size");
     text.branching = checkedCount(branching, "argument branching");
     if (seed < 0) fail("argument seed: must be >= 0");
@@ -470,7 +472,7 @@ PYBIND11_MODULE(_cullide, m) {
             "passes",
             [](const PyResult& r) {
                 const size_t n = r.result.passes.size();
-                py::array_t<uint32_t> level(n), direction(n), round(n);
+                py::array_t<uint32_t> level(n), direction(n), round(n), views(n);
                 py::array_t<int32_t> width(n), height(n);
                 py::array_t<uint64_t> nodesIn(n), nodesOut(n), triIn(n), triOut(n), rendered(n), queries(n);
                 py::array_t<double> seconds(n);
@@ -481,13 +483,13 @@ PYBIND11_MODULE(_cullide, m) {
                     triIn.mutable_at(i) = p.trianglesIn, triOut.mutable_at(i) = p.trianglesOut;
                     rendered.mutable_at(i) = p.trianglesRendered, queries.mutable_at(i) = p.queries;
                     width.mutable_at(i) = p.width, height.mutable_at(i) = p.height, round.mutable_at(i) = p.round;
-                    seconds.mutable_at(i) = p.seconds;
+                    seconds.mutable_at(i) = p.seconds, views.mutable_at(i) = p.views;
                 }
                 py::dict d;
                 d["level"] = level, d["direction"] = direction, d["nodes_in"] = nodesIn, d["nodes_out"] = nodesOut;
                 d["triangles_in"] = triIn, d["triangles_out"] = triOut, d["triangles_rendered"] = rendered;
                 d["queries"] = queries, d["width"] = width, d["height"] = height, d["round"] = round;
-                d["seconds"] = seconds;
+                d["seconds"] = seconds, d["views"] = views;  // views: clustered's groups drawn (else 1)
                 return d;
             },
             "One entry per reducePCS call, as numpy columns (the keys of `prune --json`'s passes).")
@@ -518,7 +520,8 @@ PYBIND11_MODULE(_cullide, m) {
     m.def("prune", &prune, py::arg("scene"), py::arg("method") = "modified", py::arg("resolution") = py::int_(500),
           py::arg("depth") = "d24", py::arg("directions") = "axes", py::arg("hierarchy") = "connectivity",
           py::arg("leaf_size") = 16, py::arg("branching") = 4, py::arg("seed") = 1, py::arg("backend") = "cpu",
-          py::arg("threads") = 0, py::arg("frame") = 0, "Runs Cullide on one frame (see the package's prune).");
+          py::arg("threads") = 0, py::arg("frame") = 0, py::arg("views") = "fit",
+          "Runs Cullide on one frame (see the package's prune).");
 
     m.def("oracle", &oracleOf, py::arg("scene"), py::arg("frame") = 0,
           "Exact intersecting pairs of one frame: (p,5) uint32 [objA, triA, objB, triB, class] "
@@ -531,7 +534,8 @@ PYBIND11_MODULE(_cullide, m) {
            const std::vector<std::string>& resolutions, const std::vector<std::string>& depths,
            const std::vector<std::string>& directions, const std::vector<std::string>& hierarchies,
            const std::vector<uint32_t>& leafSizes, const std::vector<std::string>& backends,
-           const std::vector<int>& threads, int repeats, bool oracle, const std::string& out) {
+           const std::vector<int>& threads, int repeats, bool oracle, const std::string& out,
+           const std::vector<std::string>& views) {
             if (scenes.empty()) fail("argument scenes: no scenes");
             if (repeats < 1) fail("argument repeats: must be >= 1");
             study::StudyOptions o;
@@ -540,6 +544,8 @@ PYBIND11_MODULE(_cullide, m) {
             s.names.resolution = "argument resolutions", s.names.depth = "argument depths";
             s.names.method = "argument methods", s.names.hierarchy = "argument hierarchies";
             s.names.leafSize = "argument leaf_sizes";
+            if (views.empty()) fail("argument views: no view modes");
+            s.views = views;
             s.scenes = scenes, s.methods = methods, s.resolutions = resolutions, s.depths = depths;
             s.directions = directions, s.hierarchies = hierarchies, s.leafSizes = leafSizes;
             s.backends = backends, s.threads = threads, s.repeats = repeats, s.oracle = oracle;
@@ -558,7 +564,7 @@ PYBIND11_MODULE(_cullide, m) {
         },
         py::arg("scenes"), py::arg("methods"), py::arg("resolutions"), py::arg("depths"), py::arg("directions"),
         py::arg("hierarchies"), py::arg("leaf_sizes"), py::arg("backends"), py::arg("threads"), py::arg("repeats"),
-        py::arg("oracle"), py::arg("out"),
+        py::arg("oracle"), py::arg("out"), py::arg("views") = std::vector<std::string>{"fit"},
         "Runs a study (see the package's study); returns the records as JSON texts.");
     m.def(
         "study_columns", [] { return study::columns(); }, "The study CSV's columns, in order.");

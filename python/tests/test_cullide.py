@@ -139,6 +139,20 @@ def test_prune_equals_command_line(tmp_path):
     assert list(r.passes["queries"]) == [p["queries"] for p in passes]
 
 
+# Trap: views= not passed through (a clustered run equal to fit's), or passes without their views
+# count; the PCS equals `cullide prune --views clustered`'s.
+def test_prune_views_equals_command_line(tmp_path):
+    r = cullide.prune(cullide.load_scene(SCENE), resolution=64, views="clustered")
+    out = tmp_path / "v.json"
+    cli("prune", SCENE, "--resolution", "64", "--views", "clustered", "--json", str(out))
+    j = json.loads(out.read_text())
+    expected = np.array(j["frames"][0]["pcs"], dtype=np.uint32).reshape(-1, 2)
+    assert np.array_equal(r.pcs, expected)
+    assert list(r.passes["views"]) == [p["views"] for p in j["frames"][0]["passes"]]
+    assert max(r.passes["views"]) > 1
+    assert set(cullide.prune(cullide.load_scene(SCENE), resolution=64).passes["views"]) == {1}
+
+
 # Trap: prune's options (method, resolution text, depth, directions, threads) and face_mask's agreement with pcs.
 def test_prune_options_and_face_mask():
     s = cullide.load_scene(SCENE)
@@ -178,6 +192,7 @@ def test_prune_options_and_face_mask():
         ({"backend": "vulkan9"}, "backend"),
         ({"threads": -1}, "threads"),
         ({"frame": 5}, "frame"),
+        ({"views": "cluster"}, "views"),
     ],
 )
 def test_prune_bad_options(kwargs, message):
@@ -245,6 +260,12 @@ def test_study(tmp_path):
         cullide.study("cows:500", methods="best", repeats=1, out=tmp_path / "t.csv")
     with pytest.raises(ValueError, match="backend"):
         cullide.study("cows:500", backends="vulkan9", repeats=1, out=tmp_path / "t.csv")
+    # The views axis (docs/cullide.md#views-per-cluster): one row per mode, named in its column.
+    v = cullide.study("cows:500", resolutions=64, views=["fit", "clustered"], repeats=1, oracle=False,
+                      out=tmp_path / "v.csv")
+    assert list(v["views"]) == ["fit", "clustered"]
+    with pytest.raises(ValueError, match="views"):
+        cullide.study("cows:500", views="cluster", repeats=1, out=tmp_path / "u.csv")
 
 
 # Trap: the backend interface from Python: two overlapping quads, the far one drawn first, the

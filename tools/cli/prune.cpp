@@ -139,7 +139,7 @@ int runPrune(const PruneOptions& o) {
             nlohmann::ordered_json pcs = nlohmann::ordered_json::array();
             for (const PcsTriangle& p : r.pcs) pcs.push_back({p.object, p.triangle});
             nlohmann::ordered_json passes = nlohmann::ordered_json::array();
-            for (const PassStats& p : r.passes) passes.push_back(study::passJson(p));
+            for (const PassStats& p : r.passes) passes.push_back(study::passJson(p, options.views != ViewMode::Fit));
             frames.push_back({{"frame", f},
                               {"triangles", total},
                               {"pcs", pcs},
@@ -181,6 +181,8 @@ int runPrune(const PruneOptions& o) {
         for (const Vec3d& d : options.directions) j["options"]["directions"].push_back({d.x(), d.y(), d.z()});
         // Adaptive resolution: width x height is the smallest viewport; each pass has its own.
         if (options.autoCoverage > 0) j["options"]["auto_coverage"] = options.autoCoverage;
+        // Clustered views (absent for fit, as before the option): each pass records its views.
+        if (options.views != ViewMode::Fit) j["options"]["views"] = toString(options.views);
         // The GL and Vulkan backends' descriptions name their driver; the CPU reference rasterizer has none.
         std::vector<std::string> drivers;
         if (o.backend != "cpu") drivers.push_back(backend->describe());

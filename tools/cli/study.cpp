@@ -18,7 +18,7 @@ namespace {
 struct StudyCliOptions {
     std::string spec;
     std::string preset;
-    std::vector<std::string> scenes, methods, resolutions, depths, directions, hierarchies, backends;
+    std::vector<std::string> scenes, methods, resolutions, depths, directions, views, hierarchies, backends;
     std::vector<uint32_t> leafSizes;
     std::vector<int> threads;
     int repeats = 0;  // 0: the spec's
@@ -51,6 +51,7 @@ study::Spec buildSpec(const StudyCliOptions& o) {
     if (!o.resolutions.empty()) s.resolutions = o.resolutions, s.names.resolution = "option --resolutions";
     if (!o.depths.empty()) s.depths = o.depths, s.names.depth = "option --depths";
     if (!o.directions.empty()) s.directions = o.directions, s.names.directions = "option --directions";
+    if (!o.views.empty()) s.views = o.views, s.names.views = "option --views";
     if (!o.hierarchies.empty()) s.hierarchies = o.hierarchies, s.names.hierarchy = "option --hierarchies";
     if (!o.leafSizes.empty()) s.leafSizes = o.leafSizes, s.names.leafSize = "option --leaf-sizes";
     if (!o.backends.empty()) s.backends = o.backends;
@@ -108,8 +109,8 @@ void refuseInapplicable(const StudyCliOptions& o, const CLI::App& sub) {
         return;
     }
     if (!o.spec.empty()) throw CLI::ValidationError("spec", "a study spec does not apply to --stability");
-    for (const char* name : {"--preset", "--resolutions", "--hierarchies", "--leaf-sizes", "--backends", "--threads",
-                             "--repeats", "--no-oracle", "--shard", "--progress"})
+    for (const char* name : {"--preset", "--resolutions", "--views", "--hierarchies", "--leaf-sizes", "--backends",
+                             "--threads", "--repeats", "--no-oracle", "--shard", "--progress"})
         refuse(name, "does not apply to --stability");
     if (o.stability != "tilt") refuse("--directions", "applies to --stability tilt only");
     if (o.stability != "jitter") refuse("--scenes", "applies to --stability jitter only");
@@ -168,6 +169,7 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("--resolutions", o->resolutions, "Viewports: N or WxH, or auto / auto:K (adaptive)");
     sub->add_option("--depths", o->depths, "Depth formats: 8..32 or float");
     sub->add_option("--directions", o->directions, "Direction sets: axes, N, or a list (one set per argument)");
+    sub->add_option("--views", o->views, "View modes: fit | clustered (docs/cullide.md#views-per-cluster)");
     sub->add_option("--hierarchies", o->hierarchies, "connectivity | random");
     sub->add_option("--leaf-sizes", o->leafSizes, "Hierarchy leaf sizes");
     sub->add_option("--backends", o->backends, "Backends: " + raster::backendNameList());

@@ -42,6 +42,8 @@ Json workloadJson(const std::string& scene, const CullideOptions& options) {
               {"leaf_size", options.hierarchy.leafSize},
               {"branching", options.hierarchy.branching}};
     if (options.autoCoverage > 0) j["auto_coverage"] = options.autoCoverage;  // each list's view has its own size
+    // Clustered views: a call is one list per group drawn, each with its own view.
+    if (options.views != ViewMode::Fit) j["views"] = toString(options.views);
     return j;
 }
 
@@ -386,6 +388,10 @@ void addCullideOptions(CLI::App* sub, OptionText& o) {
            "View directions: 'axes' (+x -x +y -y +z -z), a count N (spread), or a list 'x,-y,z' / '1 0 0;0 1 1'")
         ->capture_default_str();
     sub->add_option("--hierarchy", o.hierarchy, "connectivity | random")->capture_default_str();
+    sub->add_option("--views", o.views,
+                    "fit (one view per reducePCS call, fitted to the PCS) | clustered (one fitted view per group of "
+                    "nodes whose projections overlap; docs/cullide.md#views-per-cluster)")
+        ->capture_default_str();
     sub->add_option("--leaf-size", o.leafSize, "Triangles per hierarchy leaf (1 to 1,000,000)")->capture_default_str();
     sub->add_option("--branching", o.branching, "Children per hierarchy node (2 to 64)")->capture_default_str();
     sub->add_option("--seed", o.seed, "Seed of the random hierarchy");

@@ -16,7 +16,8 @@
 //     tightly to the triangles of the current PCS: x/y to their projected bounds with square
 //     pixels (the longer side fills the viewport, the box centred), near/far to their depth
 //     extent (plus two depth units at each end). A PCS that is flat along d, or a point, gets a
-//     tiny box around it so the view stays valid.
+//     tiny box around it so the view stays valid. With ViewMode::Clustered, one such view per
+//     group of nodes whose projections overlap (viewGroups), each with its own command list.
 //   - A node is pruned by one reducePCS call (one direction) when it is fully visible in both the
 //     forward and the reverse pass (the paper's Lemma 3.2): its queries passed no fragment.
 //   - The loop (Figure 1): start from the objects' roots; for each level, run reducePCS once per
@@ -90,6 +91,10 @@ struct PassStats {
     size_t queries = 0;
     int width = 0, height = 0;  // the call's viewport (with --resolution auto, chosen per call)
     uint32_t round = 0;  // reliable with --resolution auto: the round of calls (0, 1, ...); else 0
+    // Views drawn (ViewMode::Clustered: the groups drawn, each with its own view and command list;
+    // else 1). width x height is then the largest of their viewports (by pixel count); the
+    // triangles rendered and queries are the sums over them.
+    uint32_t views = 1;
     double seconds = 0;  // wall time of the call, command building and backend included
 };
 
@@ -99,6 +104,19 @@ inline constexpr double kDefaultAutoCoverage = 1;
 inline constexpr double kMaxAutoCoverage = 1024;
 // Pixels per call at most: 4096 x 4096 (a D24 buffer of 64 MiB).
 inline constexpr int64_t kDefaultAutoBudget = int64_t(4096) * 4096;
+
+// How each reducePCS call views the PCS (`--views`, docs/cullide.md#views-per-cluster).
+enum class ViewMode : uint8_t {
+    // One view fitted to the whole PCS (the paper's).
+    Fit,
+    // The PCS nodes are grouped by their projected rectangles in the call's frame (connected
+    // components of overlap, touching included); each group gets its own fitted view and command
+    // list. Nodes of different groups have disjoint projections, so their triangles can neither
+    // cross nor touch: no method's promise depends on testing them against each other.
+    Clustered,
+};
+const char* toString(ViewMode m);
+ViewMode parseViewMode(const std::string& text);  // "fit" | "clustered"; InputError("option --views", ...)
 
 // A PCS entry: a triangle of the scene (scene.h).
 using PcsTriangle = TriangleRef;
@@ -116,6 +134,7 @@ struct CullideOptions {
     double autoCoverage = 0;
     int64_t autoBudget = kDefaultAutoBudget;
     DepthFormat depth = DepthFormat::unorm(24);
+    ViewMode views = ViewMode::Fit;
     HierarchyOptions hierarchy;
     // Called after every reducePCS call with its statistics and the PCS it left (sorted by
     // object, then triangle), e.g. to draw the paper's Figure 12. Costs a PCS expansion per
@@ -171,6 +190,14 @@ void appendModifiedReducePcs(CommandList& list, std::span<const TriangleRange> r
 OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
                   std::span<const TriangleRange> ranges, const Vec3d& dir, int width, int height,
                   const DepthFormat& depth);
+
+// ViewMode::Clustered's groups: the items of `ranges` (PCS nodes) whose projected rectangles in the
+// frame OrthoView::looking(dir) overlap or touch, transitively (closed rectangles, each widened by
+// a relative 1e-9 of its vertices' magnitude so that rounding in the projection can never
+// separate two nodes that share a point). Each group lists its items' indices in increasing
+// order; the groups are ordered by their first item. Deterministic, the same for any thread count.
+std::vector<std::vector<uint32_t>> viewGroups(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                                              std::span<const TriangleRange> ranges, const Vec3d& dir);
 
 // Adaptive resolution: the viewport of one reducePCS call in direction `dir` on the triangles in
 // `ranges`, a pure function of them (the same for any thread count). In the frame

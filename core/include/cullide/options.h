@@ -4,7 +4,7 @@
 //
 // Conventions
 //   - Values arrive as the user typed them: text for the method, viewport, depth format,
-//     directions and hierarchy kind; numbers for the hierarchy's sizes and seed.
+//     directions, hierarchy kind and view mode; numbers for the hierarchy's sizes and seed.
 //   - Every error is InputError(name, cause). `name` is what the user typed the value as
 //     (OptionNames: "option --depth" by default, "option --depths" or "spec.json: field 'depths'"
 //     in a study); `cause` is the same words for the same bad value whichever command it came
@@ -32,6 +32,7 @@ struct OptionText {
     std::string depth = "24";  // unorm bits 8..32 (24, d24, unorm24) or float (float, f32, d32f)
     std::string directions = "axes";  // axes | N (spread) | a list x,-y,z or '1 0 0;0 1 1'
     std::string hierarchy = "connectivity";  // connectivity | random
+    std::string views = "fit";  // fit | clustered (ViewMode)
     uint32_t leafSize = 16;
     uint32_t branching = 4;
     uint64_t seed = 1;  // of the random hierarchy
@@ -44,6 +45,7 @@ struct OptionNames {
     std::string depth = "option --depth";
     std::string directions = "option --directions";
     std::string hierarchy = "option --hierarchy";
+    std::string views = "option --views";
     std::string leafSize = "option --leaf-size";
     std::string branching = "option --branching";
 };

@@ -115,6 +115,8 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
         } else if (key == "directions") {
             s.directions = r.texts(
                 v, key, [](const std::string& t) { return parseDirections(t); }, 1, 10000);
+        } else if (key == "views") {
+            s.views = r.texts(v, key, parseViewMode);
         } else if (key == "hierarchies") {
             s.hierarchies = r.texts(v, key, parseHierarchyKind);
         } else if (key == "leaf_sizes") {
@@ -141,7 +143,7 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
             throw InputError(source,
                              "unknown field '" + key +
                                  "' (fields: scenes, methods, resolutions, depths, "
-                                 "directions, hierarchies, leaf_sizes, backends, threads, branching, seed, "
+                                 "directions, views, hierarchies, leaf_sizes, backends, threads, branching, seed, "
                                  "repeats, oracle)");
         }
     }

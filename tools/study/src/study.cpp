@@ -102,7 +102,7 @@ OptionNames specOptionNames(const std::string& source) {
     OptionNames n;
     n.method = field("methods"), n.resolution = field("resolutions"), n.depth = field("depths");
     n.directions = field("directions"), n.hierarchy = field("hierarchies"), n.leafSize = field("leaf_sizes");
-    n.branching = field("branching");
+    n.branching = field("branching"), n.views = field("views");
     return n;
 }
 
@@ -122,6 +122,7 @@ std::string RunConfig::key() const {
     std::ostringstream k;
     k << scene << '|' << frame << '|' << method << '|' << resolution << '|' << depth << '|' << directions << '|'
       << hierarchy << '|' << leafSize << '|' << branching << '|' << seed << '|' << backend << '|' << threads;
+    if (views != "fit") k << "|views=" << views;
     return k.str();
 }
 
@@ -163,7 +164,7 @@ std::vector<RunConfig> expand(const Spec& spec) {
         if (v.empty()) throw InputError("study spec", std::string("no ") + what);
     };
     nonEmpty(spec.methods, "methods"), nonEmpty(spec.resolutions, "resolutions"), nonEmpty(spec.depths, "depths");
-    nonEmpty(spec.directions, "directions"), nonEmpty(spec.hierarchies, "hierarchies");
+    nonEmpty(spec.directions, "directions"), nonEmpty(spec.hierarchies, "hierarchies"), nonEmpty(spec.views, "views");
     nonEmpty(spec.leafSizes, "leaf sizes"), nonEmpty(spec.backends, "backends"), nonEmpty(spec.threads, "threads");
     for (const std::string& b : spec.backends)
         if (!raster::isBackendName(b))
@@ -193,18 +194,19 @@ std::vector<RunConfig> expand(const Spec& spec) {
                 for (const auto& r : spec.resolutions)
                     for (const auto& d : spec.depths)
                         for (const auto& dir : spec.directions)
-                            for (const auto& h : spec.hierarchies)
-                                for (uint32_t leaf : spec.leafSizes)
-                                    for (const auto& b : spec.backends)
-                                        for (int t : spec.threads) {
-                                            RunConfig c;
-                                            c.index = out.size();
-                                            c.scene = scene, c.frame = frame, c.method = m, c.resolution = r;
-                                            c.depth = d, c.directions = dir, c.hierarchy = h, c.leafSize = leaf;
-                                            c.branching = spec.branching, c.seed = spec.seed, c.backend = b;
-                                            c.threads = t;
-                                            out.push_back(c);
-                                        }
+                            for (const auto& v : spec.views)
+                                for (const auto& h : spec.hierarchies)
+                                    for (uint32_t leaf : spec.leafSizes)
+                                        for (const auto& b : spec.backends)
+                                            for (int t : spec.threads) {
+                                                RunConfig c;
+                                                c.index = out.size();
+                                                c.scene = scene, c.frame = frame, c.method = m, c.resolution = r;
+                                                c.depth = d, c.directions = dir, c.views = v, c.hierarchy = h;
+                                                c.leafSize = leaf, c.branching = spec.branching, c.seed = spec.seed;
+                                                c.backend = b, c.threads = t;
+                                                out.push_back(c);
+                                            }
     }
     for (const RunConfig& c : out) (void)cullideOptions(c, spec.names);  // every value checked before any run
     return out;
@@ -230,22 +232,25 @@ CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names) {
     OptionText t;
     t.method = c.method, t.resolution = c.resolution, t.depth = c.depth, t.directions = c.directions;
     t.hierarchy = c.hierarchy, t.leafSize = c.leafSize, t.branching = c.branching, t.seed = c.seed;
+    t.views = c.views;
     return parseCullideOptions(t, names);
 }
 
-nlohmann::ordered_json passJson(const PassStats& p) {
-    return {{"level", p.level},
-            {"direction", p.direction},
-            {"nodes_in", p.nodesIn},
-            {"nodes_out", p.nodesOut},
-            {"triangles_in", p.trianglesIn},
-            {"triangles_out", p.trianglesOut},
-            {"triangles_rendered", p.trianglesRendered},
-            {"queries", p.queries},
-            {"width", p.width},
-            {"height", p.height},
-            {"round", p.round},
-            {"seconds", p.seconds}};
+nlohmann::ordered_json passJson(const PassStats& p, bool views) {
+    nlohmann::ordered_json j = {{"level", p.level},
+                                {"direction", p.direction},
+                                {"nodes_in", p.nodesIn},
+                                {"nodes_out", p.nodesOut},
+                                {"triangles_in", p.trianglesIn},
+                                {"triangles_out", p.trianglesOut},
+                                {"triangles_rendered", p.trianglesRendered},
+                                {"queries", p.queries},
+                                {"width", p.width},
+                                {"height", p.height},
+                                {"round", p.round},
+                                {"seconds", p.seconds}};
+    if (views) j["views"] = p.views;
+    return j;
 }
 
 nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const oracle::Truth* truth, int repeats,
@@ -280,6 +285,7 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     j["depth"] = options.depth.name();
     j["directions"] = c.directions;
     j["direction_count"] = options.directions.size();
+    j["views"] = c.views;
     j["hierarchy"] = c.hierarchy;
     j["leaf_size"] = c.leafSize;
     j["branching"] = c.branching;
@@ -338,7 +344,7 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     }
     j["backend_description"] = backend.describe();
     nlohmann::ordered_json passes = nlohmann::ordered_json::array();
-    for (const PassStats& p : r.passes) passes.push_back(passJson(p));
+    for (const PassStats& p : r.passes) passes.push_back(passJson(p, options.views != ViewMode::Fit));
     j["passes"] = passes;
     // Not a column of the CSV; like the timings, it differs between runs of one configuration.
     std::vector<std::string> drivers;
@@ -348,30 +354,55 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
 }
 
 const std::vector<std::string>& columns() {
-    static const std::vector<std::string> c = {"index",           "id",
-                                               "scene",           "frame",
-                                               "triangles",       "objects",
-                                               "method",          "resolution",
-                                               "depth",           "directions",
-                                               "direction_count", "hierarchy",
-                                               "leaf_size",       "branching",
-                                               "backend",         "threads",
-                                               "repeats",         "time_ms",
-                                               "time_min_ms",     "time_max_ms",
-                                               "hierarchy_ms",    "calls",
-                                               "levels",          "triangles_rendered",
-                                               "queries",         "pcs",
-                                               "oracle_pairs",    "oracle_crossing",
-                                               "oracle_touching", "colliding",
-                                               "false_prunes",    "fp_crossing",
-                                               "fp_touching",     "fp_depth_rounding",
-                                               "fp_sampling",     "fp_edge_on",
-                                               "fp_untested",     "fp_unexplained",
-                                               "missed_pairs",    "mp_crossing",
-                                               "mp_touching",     "mp_depth_rounding",
-                                               "mp_sampling",     "mp_edge_on",
-                                               "mp_untested",     "mp_unexplained",
-                                               "false_positives", "efficiency",
+    static const std::vector<std::string> c = {"index",
+                                               "id",
+                                               "scene",
+                                               "frame",
+                                               "triangles",
+                                               "objects",
+                                               "method",
+                                               "resolution",
+                                               "depth",
+                                               "directions",
+                                               "direction_count",
+                                               "views",
+                                               "hierarchy",
+                                               "leaf_size",
+                                               "branching",
+                                               "backend",
+                                               "threads",
+                                               "repeats",
+                                               "time_ms",
+                                               "time_min_ms",
+                                               "time_max_ms",
+                                               "hierarchy_ms",
+                                               "calls",
+                                               "levels",
+                                               "triangles_rendered",
+                                               "queries",
+                                               "pcs",
+                                               "oracle_pairs",
+                                               "oracle_crossing",
+                                               "oracle_touching",
+                                               "colliding",
+                                               "false_prunes",
+                                               "fp_crossing",
+                                               "fp_touching",
+                                               "fp_depth_rounding",
+                                               "fp_sampling",
+                                               "fp_edge_on",
+                                               "fp_untested",
+                                               "fp_unexplained",
+                                               "missed_pairs",
+                                               "mp_crossing",
+                                               "mp_touching",
+                                               "mp_depth_rounding",
+                                               "mp_sampling",
+                                               "mp_edge_on",
+                                               "mp_untested",
+                                               "mp_unexplained",
+                                               "false_positives",
+                                               "efficiency",
                                                "attribution_ms"};
     return c;
 }

@@ -3,11 +3,12 @@
 //
 // Conventions
 //   - A Spec lists values per axis; the sweep is their product, in a fixed order: scene (and
-//     frame) outermost, then method, resolution, depth, directions, hierarchy, leaf size, backend,
-//     threads. RunConfig::index is the position in that order.
+//     frame) outermost, then method, resolution, depth, directions, views, hierarchy, leaf size,
+//     backend, threads. RunConfig::index is the position in that order.
 //   - A run's id is a 16-hex-digit FNV-1a hash of its canonical key (every axis value, as given,
-//     plus branching and seed): stable across processes, shards and machines; resuming and merging
-//     key on it. Repeats are not part of the key.
+//     plus branching and seed; views only when not "fit", so that the ids of studies from before
+//     the axis stay): stable across processes, shards and machines; resuming and merging key on it. Repeats are not
+//     part of the key.
 //   - Scenes: "bunny:N" (the deformed bunny, make-scene bunny), "cows:N" (two cows), "cylinders:N"
 //     or "cylinders:N:C", "twist:N" (a twisted bunny); or a scene/mesh file; "@K" picks frame K
 //     of a file's animation, "@all" (the default for files) every frame.
@@ -47,6 +48,7 @@ struct Spec {
     std::vector<std::string> resolutions{"500"};
     std::vector<std::string> depths{"24"};
     std::vector<std::string> directions{"axes"};
+    std::vector<std::string> views{"fit"};  // fit | clustered (docs/cullide.md#views-per-cluster)
     std::vector<std::string> hierarchies{"connectivity"};
     std::vector<uint32_t> leafSizes{16};
     std::vector<std::string> backends{"cpu"};
@@ -60,7 +62,7 @@ struct Spec {
 };
 
 // Reads a JSON spec: {"scenes": [...], "methods": [...], "resolutions": [...], "depths": [...],
-// "directions": [...], "hierarchies": [...], "leaf_sizes": [...], "backends": [...],
+// "directions": [...], "views": [...], "hierarchies": [...], "leaf_sizes": [...], "backends": [...],
 // "threads": [...], "branching": B, "seed": S, "repeats": K, "oracle": true}. Scalars are accepted
 // where lists are expected, and a list of one where a scalar is. Every field is checked here,
 // before anything runs: an unknown key, an empty list, a wrong type or a value out of range is an
@@ -76,6 +78,7 @@ struct RunConfig {
     std::string scene;
     uint32_t frame = 0;
     std::string method, resolution, depth, directions, hierarchy;
+    std::string views = "fit";
     uint32_t leafSize = 16, branching = 4;
     uint64_t seed = 1;
     std::string backend;
@@ -104,8 +107,9 @@ size_t studyFrameCount(const std::string& text);
 // Options of a configuration (throws InputError on bad values, naming them by `names`).
 CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names = specOptionNames("study spec"));
 
-// One reducePCS call's statistics as a record's (and prune --json's) "passes" entry.
-nlohmann::ordered_json passJson(const PassStats& p);
+// One reducePCS call's statistics as a record's (and prune --json's) "passes" entry; `views`: with
+// its count of views (clustered views only, so that fit's entries stay as they were).
+nlohmann::ordered_json passJson(const PassStats& p, bool views = false);
 
 // Runs one configuration: `repeats` timed runs, then (with the oracle) one instrumented run for
 // the causes. `truth` may be null when the oracle is off (the measures are then null). Returns
