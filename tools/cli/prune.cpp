@@ -76,6 +76,10 @@ int runPrune(const PruneOptions& o) {
     // PCS, bit for bit: hierarchy.h); one frame has nothing to reuse, so nothing is kept.
     std::shared_ptr<HierarchyCache> hierarchies;
     if (!o.rebuildHierarchy && last - first > 1) hierarchies = std::make_shared<HierarchyCache>();
+    // Coherent directions learn from frame to frame; one frame is a full check.
+    std::shared_ptr<DirectionHistory> history;
+    if (options.directionMode == DirectionMode::Coherent && last - first > 1)
+        history = std::make_shared<DirectionHistory>();
     for (size_t f = first; f < last; ++f) {
         const size_t done = f - first;
         std::string frameName = "frame ";  // built stepwise: GCC 12's -Wrestrict on "..." + std::string
@@ -84,6 +88,7 @@ int runPrune(const PruneOptions& o) {
         const Scene scene = animation.sceneAt(f);
         CullideOptions frameOptions = options;
         frameOptions.hierarchyCache = hierarchies;
+        frameOptions.directionHistory = history;
         // Within a frame, per reducePCS call: a large scene's frame can take minutes. Set only when
         // the bar is drawn, so that a hidden bar leaves the run exactly as it was.
         if (bar.shown())
@@ -133,7 +138,8 @@ int runPrune(const PruneOptions& o) {
             nlohmann::ordered_json pcs = nlohmann::ordered_json::array();
             for (const PcsTriangle& p : r.pcs) pcs.push_back({p.object, p.triangle});
             nlohmann::ordered_json passes = nlohmann::ordered_json::array();
-            for (const PassStats& p : r.passes) passes.push_back(study::passJson(p));
+            for (const PassStats& p : r.passes)
+                passes.push_back(study::passJson(p, options.directionMode != DirectionMode::Fixed));
             frames.push_back({{"frame", f},
                               {"triangles", total},
                               {"pcs", pcs},
@@ -177,6 +183,10 @@ int runPrune(const PruneOptions& o) {
         for (const Vec3d& d : options.directions) j["options"]["directions"].push_back({d.x(), d.y(), d.z()});
         // Adaptive resolution: width x height is the smallest viewport; each pass has its own.
         if (options.autoCoverage > 0) j["options"]["auto_coverage"] = options.autoCoverage;
+        // Chosen directions: "directions" is the fixed list (coherent's, or the axes pca falls back
+        // to); each pass records its own direction_vector.
+        if (options.directionMode != DirectionMode::Fixed)
+            j["options"]["direction_mode"] = toString(options.directionMode);
         // The GL and Vulkan backends' descriptions name their driver; the CPU reference rasterizer has none.
         std::vector<std::string> drivers;
         if (o.backend != "cpu") drivers.push_back(backend->describe());

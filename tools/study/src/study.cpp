@@ -233,19 +233,21 @@ CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names) {
     return parseCullideOptions(t, names);
 }
 
-nlohmann::ordered_json passJson(const PassStats& p) {
-    return {{"level", p.level},
-            {"direction", p.direction},
-            {"nodes_in", p.nodesIn},
-            {"nodes_out", p.nodesOut},
-            {"triangles_in", p.trianglesIn},
-            {"triangles_out", p.trianglesOut},
-            {"triangles_rendered", p.trianglesRendered},
-            {"queries", p.queries},
-            {"width", p.width},
-            {"height", p.height},
-            {"round", p.round},
-            {"seconds", p.seconds}};
+nlohmann::ordered_json passJson(const PassStats& p, bool withVector) {
+    nlohmann::ordered_json j = {{"level", p.level},
+                                {"direction", p.direction},
+                                {"nodes_in", p.nodesIn},
+                                {"nodes_out", p.nodesOut},
+                                {"triangles_in", p.trianglesIn},
+                                {"triangles_out", p.trianglesOut},
+                                {"triangles_rendered", p.trianglesRendered},
+                                {"queries", p.queries},
+                                {"width", p.width},
+                                {"height", p.height},
+                                {"round", p.round},
+                                {"seconds", p.seconds}};
+    if (withVector) j["direction_vector"] = {p.dirVector.x(), p.dirVector.y(), p.dirVector.z()};
+    return j;
 }
 
 nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const oracle::Truth* truth, int repeats,
@@ -338,7 +340,7 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     }
     j["backend_description"] = backend.describe();
     nlohmann::ordered_json passes = nlohmann::ordered_json::array();
-    for (const PassStats& p : r.passes) passes.push_back(passJson(p));
+    for (const PassStats& p : r.passes) passes.push_back(passJson(p, options.directionMode != DirectionMode::Fixed));
     j["passes"] = passes;
     // Not a column of the CSV; like the timings, it differs between runs of one configuration.
     std::vector<std::string> drivers;

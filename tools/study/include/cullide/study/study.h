@@ -104,8 +104,9 @@ size_t studyFrameCount(const std::string& text);
 // Options of a configuration (throws InputError on bad values, naming them by `names`).
 CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names = specOptionNames("study spec"));
 
-// One reducePCS call's statistics as a record's (and prune --json's) "passes" entry.
-nlohmann::ordered_json passJson(const PassStats& p);
+// One reducePCS call's statistics as a record's (and prune --json's) "passes" entry; with
+// `withVector` (chosen directions: pca, coherent) also "direction_vector", the direction itself.
+nlohmann::ordered_json passJson(const PassStats& p, bool withVector = false);
 
 // Runs one configuration: `repeats` timed runs, then (with the oracle) one instrumented run for
 // the causes. `truth` may be null when the oracle is off (the measures are then null). Returns
