@@ -65,8 +65,15 @@ int runPrune(const PruneOptions& o) {
         std::snprintf(viewport, sizeof viewport, "auto:%g (at least %dx%d)", options.autoCoverage, options.width,
                       options.height);
     else std::snprintf(viewport, sizeof viewport, "%dx%d", options.width, options.height);
-    std::printf("%s: %s, %s, %s, %zu direction(s), %s hierarchy (leaf %u, branching %u), %s\n", o.scene.c_str(),
-                toString(options.method), viewport, options.depth.name().c_str(), options.directions.size(),
+    // Chosen directions: pca chooses six per level; coherent chooses among the fixed list.
+    char directions[64];
+    if (options.directionMode == DirectionMode::Pca) std::snprintf(directions, sizeof directions, "pca directions");
+    else
+        std::snprintf(directions, sizeof directions, "%s%zu direction(s)",
+                      options.directionMode == DirectionMode::Coherent ? "coherent over " : "",
+                      options.directions.size());
+    std::printf("%s: %s, %s, %s, %s, %s hierarchy (leaf %u, branching %u), %s\n", o.scene.c_str(),
+                toString(options.method), viewport, options.depth.name().c_str(), directions,
                 toString(options.hierarchy.kind), options.hierarchy.leafSize, options.hierarchy.branching,
                 backend->describe().c_str());
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
