@@ -111,12 +111,16 @@ const char* toString(DirectionMode m);  // "fixed" | "pca" | "coherent"
 std::vector<Vec3d> pcaFrame(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
                             std::span<const TriangleRange> ranges);
 // The six directions of DirectionMode::Pca for these triangles: the orthonormal frame that faces
-// them best, as +v1, -v1, +v2, -v2, +v3, -v3. Candidates are the pcaFrame itself and fixed turns
-// of it (kPcaTurns of them, defined in pcaFrame's coordinates, so the choice turns with the
-// geometry); the score of a frame is the area-weighted sum over the triangles of
-// min(1/3, min over its three axes of |n . v|): a triangle seen nearly edge-on from any axis
-// costs, one faced by at least 1/3 from every axis does not (the most any frame can promise every
-// principal orientation). The first best candidate wins. No area: axisDirections().
+// them best, as +v1, -v1, +v2, -v2, +v3, -v3 (each v sign-fixed as in pcaFrame). Candidates are
+// the pcaFrame itself and 512 fixed turns of it (64 first axes, the upper half of a 128-direction
+// Fibonacci lattice, x 8 turns about each over a quarter turn), defined in pcaFrame's coordinates
+// so that the choice turns with the geometry. The score of a frame is the area-weighted sum over
+// the triangles of min(1/3, min over its three axes of |n . v|), the normals binned (folded to one
+// sign, a cube map of 3 x 16 x 16 cells, summed per piece as in pcaFrame): a triangle seen nearly
+// edge-on from any axis costs, one faced by at least 1/3 from every axis does not (the most a frame
+// can promise all three principal orientations). The first best candidate wins. The principal
+// axes themselves are no good views: on axis-aligned geometry they are the axes, and for two
+// sheets crossing along a line one axis is that line, seen edge-on by both. No area: the axes.
 std::vector<Vec3d> pcaDirections(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
                                  std::span<const TriangleRange> ranges);
 
