@@ -23,6 +23,13 @@
 //     cpu_ms, the CPU time of all threads per build; x_90b80f8 (connectivity), commit 90b80f8's
 //     build time (one thread, so its CPU time is its wall time) over this run's wall time (see
 //     kConnectivityMs90b80f8): meaningful only on an otherwise idle machine.
+//   BM_ChosenDirections/<case>: chosen directions against the axes (docs/cullide.md#chosen-directions),
+//     both timed in every iteration (thread CPU time), the ratio printed as x_axes (the axes' time
+//     over the chosen one's: above 1 is faster). case 0 = coherent over the 16 frames of the 50k
+//     deformed bunny animation (make-scene bunny --frames 16), 1 = coherent over the 16 frames of
+//     100 bowing cylinders (50k), each run keeping a hierarchy cache and a direction history as
+//     `prune` does; 2 = pca on the 8 tilted sheets (make-scene sheets, 5k). Counters: ms per frame
+//     of each, calls of each, and the PCS sizes (summed over the frames).
 #include "cullide/cullide.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
@@ -38,7 +45,9 @@
 #include <chrono>
 #include <ctime>
 #include <map>
+#include <memory>
 #include <utility>
+#include <vector>
 
 namespace {
 
@@ -173,5 +182,62 @@ BENCHMARK(BM_Hierarchy)
     ->ArgsProduct({{0, 1}, {5000, 270000, 1000000}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// The chosen-directions workloads: frames of an animation (still scene: one frame).
+const Animation& directionsWorkload(int which) {
+    static std::map<int, Animation> cache;
+    auto it = cache.find(which);
+    if (it != cache.end()) return it->second;
+    SceneRequest r;
+    r.triangles = which == 2 ? 5000 : 50000;
+    r.frames = which == 2 ? 0 : 16;
+    Animation a;
+    if (which == 0) a = makeDeformedBunny(loadMesh(std::string(CULLIDE_DATA_DIR) + "/meshes/bunny.off"), r);
+    else if (which == 1) a = makeCylinders(100, r);
+    else a = makeSheets(8, 3.0, r);
+    return cache.emplace(which, std::move(a)).first->second;
+}
+
+void BM_ChosenDirections(benchmark::State& state) {
+    const Animation& a = directionsWorkload(int(state.range(0)));
+    std::vector<Scene> frames;
+    for (size_t f = 0; f < a.frameCount(); ++f) frames.push_back(a.sceneAt(f));
+    raster::CpuBackendOptions bo;
+    bo.threads = 1;
+    auto backend = raster::makeCpuBackend(bo);
+    const DirectionMode chosen = state.range(0) == 2 ? DirectionMode::Pca : DirectionMode::Coherent;
+    struct Totals {
+        double ms = 0;
+        size_t calls = 0, pcs = 0;
+    };
+    // Every frame of the workload with one mode, as prune runs them (a hierarchy cache over the
+    // frames; a direction history for coherent).
+    auto runAll = [&](DirectionMode mode, Totals& t) {
+        CullideOptions o;
+        o.directionMode = mode;
+        o.hierarchyCache = std::make_shared<HierarchyCache>();
+        if (mode == DirectionMode::Coherent) o.directionHistory = std::make_shared<DirectionHistory>();
+        const double begin = threadCpuMs();
+        for (const Scene& s : frames) {
+            const CullideResult r = runCullide(s, *backend, o);
+            t.calls += r.passes.size(), t.pcs += r.pcs.size();
+        }
+        t.ms += threadCpuMs() - begin;
+    };
+    Totals axes, other;
+    for (auto _ : state) {
+        runAll(DirectionMode::Fixed, axes);
+        runAll(chosen, other);
+    }
+    const double n = double(state.iterations()), perFrame = n * double(frames.size());
+    state.counters["axes_ms_per_frame"] = axes.ms / perFrame;
+    state.counters["chosen_ms_per_frame"] = other.ms / perFrame;
+    state.counters["x_axes"] = other.ms > 0 ? axes.ms / other.ms : 0;
+    state.counters["axes_calls"] = double(axes.calls) / n;
+    state.counters["chosen_calls"] = double(other.calls) / n;
+    state.counters["axes_pcs"] = double(axes.pcs) / n;
+    state.counters["chosen_pcs"] = double(other.pcs) / n;
+}
+BENCHMARK(BM_ChosenDirections)->ArgNames({"case"})->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 }  // namespace

@@ -34,6 +34,7 @@ TEST(Options, DefaultsAreCullideDefaults) {
     EXPECT_EQ(o.height, d.height);
     EXPECT_EQ(o.depth, d.depth);
     EXPECT_EQ(o.directions, d.directions);
+    EXPECT_EQ(o.directionMode, d.directionMode);
     EXPECT_EQ(o.hierarchy.kind, d.hierarchy.kind);
     EXPECT_EQ(o.hierarchy.leafSize, d.hierarchy.leafSize);
     EXPECT_EQ(o.hierarchy.branching, d.hierarchy.branching);
@@ -161,4 +162,37 @@ TEST(Options, SameBadValueSameCause) {
     ASSERT_EQ(sweep.rfind("option --depths: ", 0), 0u) << sweep;
     EXPECT_EQ(prune.substr(prune.find(": ")), sweep.substr(sweep.find(": ")));
     EXPECT_NE(prune.find("8 to 32"), std::string::npos) << prune;
+}
+
+// Trap: "pca" or "coherent" read as a list of named directions (an error) or as the axes with no
+// mode; "coherent:LIST" losing its list; a fixed text gaining a mode. Bad ones are InputError
+// under the directions' name.
+TEST(Options, ChosenDirections) {
+    auto parsed = [](const std::string& directions) {
+        OptionText t;
+        t.directions = directions;
+        return parseCullideOptions(t);
+    };
+    EXPECT_EQ(parsed("axes").directionMode, DirectionMode::Fixed);
+    EXPECT_EQ(parsed("14").directionMode, DirectionMode::Fixed);
+    const CullideOptions pca = parsed("pca");
+    EXPECT_EQ(pca.directionMode, DirectionMode::Pca);
+    EXPECT_EQ(pca.directions, axisDirections());
+    const CullideOptions coherent = parsed("coherent");
+    EXPECT_EQ(coherent.directionMode, DirectionMode::Coherent);
+    EXPECT_EQ(coherent.directions, axisDirections());
+    EXPECT_EQ(parsed("coherent:14").directions, spreadDirections(14));
+    EXPECT_EQ(parsed("coherent:x,-y").directions.size(), 2u);
+    EXPECT_EQ(parsed("coherent:axes").directionMode, DirectionMode::Coherent);
+    EXPECT_EQ(parseDirections("pca"), axisDirections());
+    EXPECT_EQ(parseDirectionMode("coherent:14"), DirectionMode::Coherent);
+    EXPECT_STREQ(toString(DirectionMode::Pca), "pca");
+    for (const char* bad : {"coherent:", "coherent:pca", "coherent:coherent", "coherent:0", "pcaa", "Pca"}) {
+        try {
+            parsed(bad);
+            ADD_FAILURE() << bad << " accepted";
+        } catch (const InputError& e) {
+            EXPECT_EQ(e.source(), "option --directions") << bad;
+        }
+    }
 }

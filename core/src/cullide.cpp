@@ -7,6 +7,8 @@
 #include "cullide/error.h"
 #include "cullide/parallel.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -82,6 +84,177 @@ std::vector<Vec3d> spreadDirections(uint32_t n) {
         dirs.push_back(Vec3d(r * std::cos(phi), r * std::sin(phi), z).normalized());
     }
     return dirs;
+}
+
+const char* toString(DirectionMode m) {
+    switch (m) {
+        case DirectionMode::Fixed: return "fixed";
+        case DirectionMode::Pca: return "pca";
+        case DirectionMode::Coherent: return "coherent";
+    }
+    return "?";
+}
+
+namespace {
+
+// The triangles of `ranges` cut into pieces of at most 4096: the pieces depend on the ranges only,
+// so per-piece sums added in piece order do not depend on the thread count.
+std::vector<TriangleRange> pieces(std::span<const TriangleRange> ranges) {
+    constexpr uint32_t kPiece = 4096;
+    std::vector<TriangleRange> out;
+    for (const TriangleRange& r : ranges)
+        for (uint32_t k = 0; k < r.count; k += kPiece) out.push_back({r.first + k, std::min(kPiece, r.count - k)});
+    return out;
+}
+
+// Twice the area times the unit normal of a triangle (its edges' cross product), in double.
+Vec3d areaNormal(std::span<const Vec3f> positions, const Triangle& t) {
+    const Vec3d a = positions[t[0]].cast<double>(), b = positions[t[1]].cast<double>(),
+                c = positions[t[2]].cast<double>();
+    return (b - a).cross(c - a);
+}
+
+// A unit vector with its largest-magnitude component (the first on a tie) positive.
+Vec3d signFixed(const Vec3d& v) {
+    int k = 0;
+    for (int i = 1; i < 3; ++i)
+        if (std::abs(v[i]) > std::abs(v[k])) k = i;
+    return v[k] < 0 ? Vec3d(-v) : v;
+}
+
+// pcaDirections' orientation bins: normals folded to their sign-fixed half (n and -n face every
+// view alike), binned by their largest component's axis and a 16 x 16 grid of the other two
+// components divided by it (a cube map of three faces).
+constexpr int kBinSide = 16;
+constexpr int kBins = 3 * kBinSide * kBinSide;
+
+int binOf(const Vec3d& n) {
+    int a = 0;
+    for (int i = 1; i < 3; ++i)
+        if (std::abs(n[i]) > std::abs(n[a])) a = i;
+    const double m = std::abs(n[a]);
+    auto cell = [&](double x) { return std::clamp(int((x / m + 1.0) * 0.5 * kBinSide), 0, kBinSide - 1); };
+    return (a * kBinSide + cell(n[(a + 1) % 3])) * kBinSide + cell(n[(a + 2) % 3]);
+}
+
+// The candidate frames of pcaDirections, in pcaFrame coordinates (columns: the three axes): the
+// frame itself, then for each of 64 first axes w (the upper half, z >= 0, of a 128-direction
+// Fibonacci lattice) 8 turns about w over a quarter turn (a frame repeats after a quarter turn).
+const std::vector<Eigen::Matrix3d>& pcaCandidates() {
+    static const std::vector<Eigen::Matrix3d> all = [] {
+        std::vector<Eigen::Matrix3d> c{Eigen::Matrix3d::Identity()};
+        for (const Vec3d& w : spreadDirections(128)) {
+            if (w.z() < 0) continue;
+            const Vec3d helper = std::abs(w.x()) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
+            const Vec3d u0 = w.cross(helper).normalized(), v0 = w.cross(u0);
+            for (int t = 0; t < 8; ++t) {
+                const double th = 0.5 * std::numbers::pi * t / 8.0;  // t/8 of a quarter turn
+                const Vec3d u = std::cos(th) * u0 + std::sin(th) * v0;
+                Eigen::Matrix3d m;
+                m.col(0) = w, m.col(1) = u, m.col(2) = w.cross(u);
+                c.push_back(m);
+            }
+        }
+        return c;
+    }();
+    return all;
+}
+
+}  // namespace
+
+std::vector<Vec3d> pcaFrame(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                            std::span<const TriangleRange> ranges) {
+    const std::vector<TriangleRange> ps = pieces(ranges);
+    std::vector<Eigen::Matrix3d> perPiece(ps.size(), Eigen::Matrix3d::Zero());
+    parallelFor(0, ps.size(), 1, [&](const auto& block) {
+        for (size_t i = block.begin(); i != block.end(); ++i)
+            for (uint32_t k = 0; k < ps[i].count; ++k) {
+                const Vec3d c = areaNormal(positions, triangles[ps[i].first + k]);
+                const double len = c.norm();
+                if (len > 0) perPiece[i] += (c * c.transpose()) / (2.0 * len);  // area * n n^T
+            }
+    });
+    Eigen::Matrix3d t = Eigen::Matrix3d::Zero();
+    for (const Eigen::Matrix3d& m : perPiece) t += m;
+    if (!t.allFinite() || !(t.trace() > 0)) return {};
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(t);
+    if (es.info() != Eigen::Success) return {};
+    // Eigen sorts the eigenvalues in increasing order: the largest (the most faced orientation) first.
+    return {signFixed(es.eigenvectors().col(2)), signFixed(es.eigenvectors().col(1)),
+            signFixed(es.eigenvectors().col(0))};
+}
+
+std::vector<Vec3d> pcaDirections(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                                 std::span<const TriangleRange> ranges) {
+    const std::vector<Vec3d> frame = pcaFrame(positions, triangles, ranges);
+    if (frame.empty()) return axisDirections();
+    Eigen::Matrix3d e;
+    e.col(0) = frame[0], e.col(1) = frame[1], e.col(2) = frame[2];
+    // The PCS's orientations in frame coordinates: per bin the area and the area-weighted folded normal.
+    const std::vector<TriangleRange> ps = pieces(ranges);
+    using Bins = std::vector<Eigen::Vector4d>;  // (area-weighted normal, area)
+    std::vector<Bins> perPiece(ps.size());
+    parallelFor(0, ps.size(), 1, [&](const auto& block) {
+        for (size_t i = block.begin(); i != block.end(); ++i) {
+            Bins& b = perPiece[i];
+            b.assign(kBins, Eigen::Vector4d::Zero());
+            for (uint32_t k = 0; k < ps[i].count; ++k) {
+                const Vec3d c = areaNormal(positions, triangles[ps[i].first + k]);
+                const double len = c.norm();
+                if (!(len > 0)) continue;
+                const Vec3d n = signFixed(e.transpose() * (c / len));
+                const double area = 0.5 * len;
+                b[size_t(binOf(n))] += Eigen::Vector4d(area * n.x(), area * n.y(), area * n.z(), area);
+            }
+        }
+    });
+    Bins all(kBins, Eigen::Vector4d::Zero());
+    for (const Bins& b : perPiece)
+        for (int k = 0; k < kBins; ++k) all[size_t(k)] += b[size_t(k)];
+    std::vector<std::pair<Vec3d, double>> orientations;  // (unit normal, area)
+    for (const Eigen::Vector4d& b : all) {
+        const Vec3d n = b.head<3>();
+        if (b.w() > 0 && n.norm() > 0) orientations.push_back({n.normalized(), b.w()});
+    }
+    const std::vector<Eigen::Matrix3d>& candidates = pcaCandidates();
+    size_t best = 0;
+    double bestScore = -1;
+    for (size_t c = 0; c < candidates.size(); ++c) {
+        double score = 0;
+        for (const auto& [n, area] : orientations) {
+            const Vec3d f = (candidates[c].transpose() * n).cwiseAbs();
+            score += area * std::min(1.0 / 3.0, f.minCoeff());
+        }
+        if (score > bestScore) best = c, bestScore = score;
+    }
+    std::vector<Vec3d> dirs;
+    for (int k = 0; k < 3; ++k) {
+        const Vec3d v = signFixed((e * candidates[best].col(k)).normalized());
+        dirs.push_back(v);
+        dirs.push_back(-v);
+    }
+    return dirs;
+}
+
+std::vector<uint32_t> DirectionHistory::plan(uint32_t level, size_t n) const {
+    std::vector<uint32_t> all(n);
+    for (size_t i = 0; i < n; ++i) all[i] = uint32_t(i);
+    if (frames == 0 || count != n || frames % std::max<uint32_t>(period, 1) == 0 || level >= pruned.size()) return all;
+    // The given order, not most-pruned first: a call that would prune nothing changes nothing, so
+    // dropping only those keeps the PCS of the full list bit for bit wherever the last frame
+    // predicted them right (reordering changed the views of the later calls and, on the
+    // animations measured, added false prunes: docs/cullide.md#chosen-directions).
+    const std::vector<size_t>& p = pruned[level];
+    std::vector<uint32_t> used;
+    for (uint32_t i : all)
+        if (i < p.size() && p[i] > 0) used.push_back(i);
+    return used;
+}
+
+void DirectionHistory::record(size_t n, std::vector<std::vector<size_t>> prunedPerLevel) {
+    count = n;
+    pruned = std::move(prunedPerLevel);
+    ++frames;
 }
 
 void CullideOptions::validate() const {
@@ -363,6 +536,7 @@ public:
         std::vector<Item> pcs;
         if (opt_.method == CullMethod::Reliable) {
             runReliable(result);
+            recordHistory(result);
             result.totalSeconds = secondsSince(start);
             return result;
         }
@@ -371,8 +545,11 @@ public:
 
         for (uint32_t level = 0; !pcs.empty(); ++level) {
             result.levels = level + 1;
-            for (uint32_t d = 0; d < opt_.directions.size() && !pcs.empty(); ++d)
-                pcs = reduce(pcs, level, d, result.passes);
+            const std::vector<std::pair<uint32_t, Vec3d>> dirs = callDirections(pcs, level);
+            for (size_t k = 0; k < dirs.size() && !pcs.empty(); ++k) {
+                dir_ = dirs[k].second;
+                pcs = reduce(pcs, level, dirs[k].first, result.passes);
+            }
             bool allLeaves = true;
             for (const Item& it : pcs) allLeaves = allLeaves && node(it).isLeaf();
             if (pcs.empty() || allLeaves) break;
@@ -387,11 +564,39 @@ public:
         }
 
         result.pcs = expand(pcs);
+        recordHistory(result);
         result.totalSeconds = secondsSince(start);
         return result;
     }
 
 private:
+    // The directions of this run's calls on `pcs` at `step` (the level, or a reliable round): (the
+    // index PassStats::direction records, the direction). Fixed: the given list; Coherent: the
+    // history's plan for the step; Pca: pcaDirections of the PCS.
+    std::vector<std::pair<uint32_t, Vec3d>> callDirections(const std::vector<Item>& pcs, uint32_t step) {
+        step_ = step;
+        std::vector<std::pair<uint32_t, Vec3d>> out;
+        if (opt_.directionMode == DirectionMode::Pca) {
+            ranges_.clear();
+            for (const Item& it : pcs) ranges_.push_back(it.range);
+            const std::vector<Vec3d> dirs = pcaDirections(positions_, triangles_, ranges_);
+            for (uint32_t k = 0; k < dirs.size(); ++k) out.push_back({k, dirs[k]});
+            return out;
+        }
+        const size_t n = opt_.directions.size();
+        if (opt_.directionMode == DirectionMode::Coherent && opt_.directionHistory) {
+            for (uint32_t d : opt_.directionHistory->plan(step, n)) out.push_back({d, opt_.directions[d]});
+        } else {
+            for (uint32_t d = 0; d < n; ++d) out.push_back({d, opt_.directions[d]});
+        }
+        return out;
+    }
+
+    void recordHistory(const CullideResult&) {
+        if (opt_.directionMode == DirectionMode::Coherent && opt_.directionHistory)
+            opt_.directionHistory->record(opt_.directions.size(), std::move(stepPruned_));
+    }
+
     // World meshes, hierarchies, and the geometry upload (each object's triangles in hierarchy order).
     void build(CullideResult& result) {
         const size_t n = scene_.objects.size();
@@ -506,8 +711,11 @@ private:
         // (docs/reliable.md), so any number of them is.
         for (round_ = 0;; ++round_) {
             const size_t before = pcs.size();
-            for (uint32_t d = 0; d < opt_.directions.size() && !pcs.empty(); ++d)
-                pcs = reduceReliable(pcs, depth, d, result.passes);
+            const std::vector<std::pair<uint32_t, Vec3d>> dirs = callDirections(pcs, round_);
+            for (size_t k = 0; k < dirs.size() && !pcs.empty(); ++k) {
+                dir_ = dirs[k].second;
+                pcs = reduceReliable(pcs, depth, dirs[k].first, result.passes);
+            }
             if (opt_.autoCoverage <= 0 || pcs.empty() || pcs.size() == before) break;
         }
         result.pcs = expand(pcs);
@@ -537,7 +745,7 @@ private:
     std::vector<uint8_t> testUnits(const std::vector<Item>& pcs, uint32_t d) {
         ranges_.clear();
         for (const Item& it : pcs) ranges_.push_back(it.range);
-        setView(d);
+        setView();
         const uint32_t n = uint32_t(pcs.size());
         const detail::UnitGraph g = detail::unitAdjacency(triangles_, ranges_);
         const std::vector<uint32_t> colour = detail::distanceTwoColouring(g);
@@ -593,14 +801,14 @@ private:
         return stays;
     }
 
-    // The view of a call in direction d on ranges_: fitted at the fixed viewport, or at the one
+    // The view of a call in direction dir_ on ranges_: fitted at the fixed viewport, or at the one
     // adaptive resolution chooses for these triangles.
-    void setView(uint32_t d) {
+    void setView() {
         int w = opt_.width, h = opt_.height;
         if (opt_.autoCoverage > 0)
-            std::tie(w, h) = adaptiveViewport(positions_, triangles_, ranges_, opt_.directions[d], opt_.autoCoverage,
-                                              opt_.width, opt_.height, opt_.autoBudget, backend_.maxViewportSide());
-        view_ = fitView(positions_, triangles_, ranges_, opt_.directions[d], w, h, opt_.depth);
+            std::tie(w, h) = adaptiveViewport(positions_, triangles_, ranges_, dir_, opt_.autoCoverage, opt_.width,
+                                              opt_.height, opt_.autoBudget, backend_.maxViewportSide());
+        view_ = fitView(positions_, triangles_, ranges_, dir_, w, h, opt_.depth);
         backend_.setView(view_);
     }
 
@@ -619,7 +827,7 @@ private:
         if (opt_.views == ViewMode::Clustered && pcs.size() > 1) {
             ranges_.clear();
             for (const Item& it : pcs) ranges_.push_back(it.range);
-            groups = viewGroups(positions_, triangles_, ranges_, opt_.directions[d]);
+            groups = viewGroups(positions_, triangles_, ranges_, dir_);
         }
         std::vector<uint8_t> stays;
         if (groups.size() <= 1) {
@@ -672,7 +880,7 @@ private:
     std::vector<uint8_t> testNodes(const std::vector<Item>& pcs, uint32_t d) {
         ranges_.clear();
         for (const Item& it : pcs) ranges_.push_back(it.range);
-        setView(d);
+        setView();
 
         list_.reset();
         // forwardQuery[i] / reverseQuery[i]: the query numbers of PCS item i in each pass.
@@ -724,10 +932,17 @@ private:
         PassStats st;
         st.level = level;
         st.direction = d;
+        st.dirVector = dir_;
         st.nodesIn = pcs.size();
         for (const Item& it : pcs) st.trianglesIn += it.range.count;
         st.nodesOut = kept.size();
         for (const Item& it : kept) st.trianglesOut += it.range.count;
+        if (opt_.directionMode == DirectionMode::Coherent) {
+            if (stepPruned_.size() <= step_) stepPruned_.resize(step_ + 1);
+            std::vector<size_t>& p = stepPruned_[step_];
+            p.resize(opt_.directions.size(), 0);
+            p[d] += st.trianglesIn - st.trianglesOut;
+        }
         st.trianglesRendered = views_.rendered;
         st.queries = views_.queries;
         // No view drawn (every group was decided undrawn): the base viewport.
@@ -760,6 +975,9 @@ private:
         int width = 0, height = 0;
         uint32_t count = 0;
     } views_;
+    Vec3d dir_ = Vec3d::Zero();  // the current call's direction
+    uint32_t step_ = 0;  // the current level (reliable: round), for the coherent history
+    std::vector<std::vector<size_t>> stepPruned_;  // coherent: [step][direction] triangles pruned
     uint32_t round_ = 0;  // reliable with adaptive resolution: the current round of calls
     std::vector<std::vector<uint8_t>> exactHit_;  // reliable: per object and node, an exact pair may intersect
 };

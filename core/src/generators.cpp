@@ -425,6 +425,51 @@ Animation makeCylinders(size_t count, const SceneRequest& request) {
     return a;
 }
 
+// ---- Sheets -------------------------------------------------------------------------------
+Animation makeSheets(size_t count, double tiltDegrees, const SceneRequest& request) {
+    CULLIDE_CHECK(count > 0, "makeSheets: count must be positive");
+    CULLIDE_CHECK(tiltDegrees >= 0 && tiltDegrees < 60, "makeSheets: tilt must be in [0, 60) degrees");
+    // cells x cells squares of two triangles each.
+    const size_t cells = std::max<size_t>(1, size_t(std::sqrt(double(request.triangles) / double(count) * 0.5) + 0.5));
+    std::vector<Triangle> tris;
+    for (size_t j = 0; j < cells; ++j)
+        for (size_t k = 0; k < cells; ++k) {
+            const uint32_t a = uint32_t(j * (cells + 1) + k), b = a + 1, c = uint32_t(a + cells + 1), d = c + 1;
+            tris.push_back({a, b, d});
+            tris.push_back({a, d, c});
+        }
+    std::mt19937_64 rng(request.seed);
+    // Stack slots along z, in a seeded order (a Fisher-Yates shuffle with our own draws).
+    std::vector<size_t> slot(count);
+    for (size_t i = 0; i < count; ++i) slot[i] = i;
+    for (size_t i = count; i-- > 1;) std::swap(slot[i], slot[size_t(uniform01(rng) * double(i + 1))]);
+    Animation a;
+    for (size_t i = 0; i < count; ++i) {
+        // Draws in a fixed order: tilt factor, azimuth, turn about the normal, centre x, y.
+        const double theta = tiltDegrees * uniform(rng, 0.5, 1.5) * kPi / 180.0;
+        const double phi = uniform(rng, 0.0, 2.0 * kPi), turn = uniform(rng, 0.0, 2.0 * kPi);
+        const double cx = uniform(rng, -0.15, 0.15), cy = uniform(rng, -0.15, 0.15);
+        const double cz = count > 1 ? -0.08 + 0.16 * double(slot[i]) / double(count - 1) : 0.0;
+        const Vec3d n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+        // An in-plane frame: any unit vector perpendicular to n, turned by `turn` about n.
+        const Vec3d u0 = normalized(cross(Vec3d(0, 1, 0), n)), v0 = cross(n, u0);
+        const Vec3d u = std::cos(turn) * u0 + std::sin(turn) * v0, v = cross(n, u);
+        Object o;
+        char name[32];
+        std::snprintf(name, sizeof name, "sheet_%03zu", i);
+        o.name = name;
+        o.mesh.triangles = tris;
+        for (size_t j = 0; j <= cells; ++j)
+            for (size_t k = 0; k <= cells; ++k) {
+                const double s = double(k) / double(cells) - 0.5, t = double(j) / double(cells) - 0.5;
+                o.mesh.positions.push_back(
+                    toF(Vec3d(cx + s * u.x() + t * v.x(), cy + s * u.y() + t * v.y(), cz + s * u.z() + t * v.z())));
+            }
+        a.scene.objects.push_back(std::move(o));
+    }
+    return a;
+}
+
 // ---- Twist -------------------------------------------------------------------------------
 //
 // About the longest axis of the referenced bounding box, through the box centre; the angle grows

@@ -64,8 +64,23 @@ ResolutionSetting parseResolutionSetting(const std::string& text, const std::str
     return r;
 }
 
+DirectionMode parseDirectionMode(const std::string& text) {
+    if (text == "pca") return DirectionMode::Pca;
+    if (text == "coherent" || text.rfind("coherent:", 0) == 0) return DirectionMode::Coherent;
+    return DirectionMode::Fixed;
+}
+
 std::vector<Vec3d> parseDirections(const std::string& text, const std::string& name) {
-    if (text == "axes") return axisDirections();
+    if (text == "axes" || text == "pca" || text == "coherent") return axisDirections();
+    if (text.rfind("coherent:", 0) == 0) {
+        const std::string list = text.substr(9);
+        if (list.empty() || list == "pca" || list.rfind("coherent", 0) == 0)
+            throw InputError(name,
+                             "'" + text +
+                                 "': coherent takes a fixed list (coherent:axes, coherent:N or "
+                                 "coherent:x,-y,z)");
+        return parseDirections(list, name);
+    }
     if (!text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; })) {
         if (text.size() > 6) throw InputError(name, "too many directions: " + text);
         return named(name, [&] { return spreadDirections(uint32_t(std::stoul(text))); });
@@ -106,6 +121,7 @@ CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& na
     o.width = resolution.width, o.height = resolution.height, o.autoCoverage = resolution.autoCoverage;
     o.depth = named(names.depth, [&] { return DepthFormat::parse(text.depth); });
     o.directions = parseDirections(text.directions, names.directions);
+    o.directionMode = parseDirectionMode(text.directions);
     o.hierarchy.kind = named(names.hierarchy, [&] { return parseHierarchyKind(text.hierarchy); });
     o.views = named(names.views, [&] { return parseViewMode(text.views); });
     if (text.leafSize < 1 || text.leafSize > kMaxLeafSize)

@@ -476,6 +476,7 @@ PYBIND11_MODULE(_cullide, m) {
                 py::array_t<int32_t> width(n), height(n);
                 py::array_t<uint64_t> nodesIn(n), nodesOut(n), triIn(n), triOut(n), rendered(n), queries(n);
                 py::array_t<double> seconds(n);
+                py::array_t<double> vector({n, size_t(3)});  // the call's direction (chosen directions)
                 for (size_t i = 0; i < n; ++i) {
                     const PassStats& p = r.result.passes[i];
                     level.mutable_at(i) = p.level, direction.mutable_at(i) = p.direction;
@@ -484,12 +485,14 @@ PYBIND11_MODULE(_cullide, m) {
                     rendered.mutable_at(i) = p.trianglesRendered, queries.mutable_at(i) = p.queries;
                     width.mutable_at(i) = p.width, height.mutable_at(i) = p.height, round.mutable_at(i) = p.round;
                     seconds.mutable_at(i) = p.seconds, views.mutable_at(i) = p.views;
+                    for (int k = 0; k < 3; ++k) vector.mutable_at(i, size_t(k)) = p.dirVector[k];
                 }
                 py::dict d;
                 d["level"] = level, d["direction"] = direction, d["nodes_in"] = nodesIn, d["nodes_out"] = nodesOut;
                 d["triangles_in"] = triIn, d["triangles_out"] = triOut, d["triangles_rendered"] = rendered;
                 d["queries"] = queries, d["width"] = width, d["height"] = height, d["round"] = round;
                 d["seconds"] = seconds, d["views"] = views;  // views: clustered's groups drawn (else 1)
+                d["direction_vector"] = vector;
                 return d;
             },
             "One entry per reducePCS call, as numpy columns (the keys of `prune --json`'s passes).")

@@ -17,7 +17,7 @@
 namespace cullide::cli {
 namespace {
 
-enum class Kind { Bunny, Cows, Cylinders, Twist };
+enum class Kind { Bunny, Cows, Cylinders, Twist, Sheets };
 
 struct MakeSceneOptions {
     Kind kind = Kind::Bunny;
@@ -26,7 +26,8 @@ struct MakeSceneOptions {
     size_t triangles = 5000;
     uint64_t seed = 1;
     size_t frames = 0;
-    size_t count = 100;
+    size_t count = 100;  // cylinders; sheets: 8 unless given
+    double tilt = 3;  // sheets: degrees from the xy plane
     bool resampleTwist = false;  // --triangles given for 'twist': resample the source mesh first
 };
 
@@ -45,6 +46,8 @@ int runMakeScene(const MakeSceneOptions& o) {
     Animation animation;
     if (o.kind == Kind::Cylinders) {
         animation = makeCylinders(o.count, request);
+    } else if (o.kind == Kind::Sheets) {
+        animation = makeSheets(o.count, o.tilt, request);
     } else {
         const std::string source = o.mesh.empty() ? defaultMesh(o.kind) : o.mesh;
         const Mesh mesh = loadMesh(source);
@@ -56,7 +59,8 @@ int runMakeScene(const MakeSceneOptions& o) {
                 // --triangles the source mesh as it is.
                 animation = makeTwistAnimation(o.resampleTwist ? resample(mesh, o.triangles) : mesh, request);
                 break;
-            case Kind::Cylinders: break;
+            case Kind::Cylinders:
+            case Kind::Sheets: break;
         }
     }
     writeScene(animation, o.out);
@@ -75,10 +79,15 @@ void addMakeSceneCommand(CLI::App& app, Action& action) {
         "make-scene",
         "Generate one of the paper's scenes reproducibly: 'bunny' (a deformed Stanford bunny with one "
         "self-intersection area), 'cows' (two cows merged into one object, many self-intersections), "
-        "'cylinders' (many deforming cylinders, as in CULLIDE), 'twist' (a twisting mesh)");
-    const std::map<std::string, Kind> kinds{
-        {"bunny", Kind::Bunny}, {"cows", Kind::Cows}, {"cylinders", Kind::Cylinders}, {"twist", Kind::Twist}};
-    sub->add_option("kind", o->kind, "bunny | cows | cylinders | twist")
+        "'cylinders' (many deforming cylinders, as in CULLIDE), 'twist' (a twisting mesh), 'sheets' (nearly parallel "
+        "flat sheets tilted a few degrees from the xy plane, some crossing: seen nearly edge-on from the x and y "
+        "axes)");
+    const std::map<std::string, Kind> kinds{{"bunny", Kind::Bunny},
+                                            {"cows", Kind::Cows},
+                                            {"cylinders", Kind::Cylinders},
+                                            {"twist", Kind::Twist},
+                                            {"sheets", Kind::Sheets}};
+    sub->add_option("kind", o->kind, "bunny | cows | cylinders | twist | sheets")
         ->required()
         ->transform(CLI::CheckedTransformer(kinds, CLI::ignore_case));
     sub->add_option("-o,--out", o->out, "Scene file to write (.json); meshes are written beside it")->required();
@@ -86,23 +95,37 @@ void addMakeSceneCommand(CLI::App& app, Action& action) {
                     "Requested triangle count, about (100 to 5,000,000; default 5000, for 'twist' the source mesh's)")
         ->check(CLI::Range(size_t(100), size_t(5'000'000)));
     sub->add_option("--seed", o->seed,
-                    "Random seed of 'cylinders' (same seed, same bytes; the other kinds are not random)");
+                    "Random seed of 'cylinders' and 'sheets' (same seed, same bytes; the other kinds are not random)");
     sub->add_option("--frames", o->frames, "Frames of animation (0: a still scene; at most 10,000)")
         ->check(CLI::Range(size_t(0), size_t(10'000)));
-    sub->add_option("--count", o->count, "Number of cylinders for 'cylinders' (1 to 10,000)")
+    sub->add_option(
+           "--count", o->count,
+           "Number of cylinders for 'cylinders' (default 100), of sheets for 'sheets' (default 8); 1 to 10,000")
         ->check(CLI::Range(size_t(1), size_t(10'000)));
+    sub->add_option("--tilt", o->tilt,
+                    "'sheets': degrees by which the sheets are tilted from the xy plane, each by 0.5 to 1.5 times "
+                    "this (0 to 59; default 3)")
+        ->check(CLI::Range(0.0, 59.0));
     sub->add_option("--mesh", o->mesh,
                     "Source mesh of 'bunny', 'cows', 'twist' (default: the bundled bunny, or the cow for 'cows')");
     sub->callback([o, sub, &action] {
         if (o->out.size() < 5 || o->out.substr(o->out.size() - 5) != ".json")
             throw CLI::ValidationError("--out", "the scene file must end in .json: " + o->out);
         // An option the kind does not use is refused, not ignored.
-        const bool cylinders = o->kind == Kind::Cylinders;
-        if (cylinders && sub->count("--mesh"))
-            throw CLI::ValidationError("--mesh", "does not apply to 'cylinders' (generated, not made from a mesh)");
-        if (!cylinders && sub->count("--count")) throw CLI::ValidationError("--count", "applies to 'cylinders' only");
-        if (!cylinders && sub->count("--seed"))
-            throw CLI::ValidationError("--seed", "applies to 'cylinders' only (the other kinds are not random)");
+        const bool cylinders = o->kind == Kind::Cylinders, sheets = o->kind == Kind::Sheets;
+        if ((cylinders || sheets) && sub->count("--mesh"))
+            throw CLI::ValidationError("--mesh",
+                                       "does not apply to 'cylinders' or 'sheets' (generated, not made from "
+                                       "a mesh)");
+        if (!cylinders && !sheets && sub->count("--count"))
+            throw CLI::ValidationError("--count", "applies to 'cylinders' and 'sheets' only");
+        if (!cylinders && !sheets && sub->count("--seed"))
+            throw CLI::ValidationError("--seed",
+                                       "applies to 'cylinders' and 'sheets' only (the other kinds are not random)");
+        if (!sheets && sub->count("--tilt")) throw CLI::ValidationError("--tilt", "applies to 'sheets' only");
+        if (sheets && sub->count("--frames"))
+            throw CLI::ValidationError("--frames", "does not apply to 'sheets' (a still scene)");
+        if (sheets && !sub->count("--count")) o->count = 8;
         o->resampleTwist = o->kind == Kind::Twist && sub->count("--triangles") > 0;
         action = [o] { return runMakeScene(*o); };
     });

@@ -65,8 +65,15 @@ int runPrune(const PruneOptions& o) {
         std::snprintf(viewport, sizeof viewport, "auto:%g (at least %dx%d)", options.autoCoverage, options.width,
                       options.height);
     else std::snprintf(viewport, sizeof viewport, "%dx%d", options.width, options.height);
-    std::printf("%s: %s, %s, %s, %zu direction(s), %s hierarchy (leaf %u, branching %u), %s\n", o.scene.c_str(),
-                toString(options.method), viewport, options.depth.name().c_str(), options.directions.size(),
+    // Chosen directions: pca chooses six per level; coherent chooses among the fixed list.
+    char directions[64];
+    if (options.directionMode == DirectionMode::Pca) std::snprintf(directions, sizeof directions, "pca directions");
+    else
+        std::snprintf(directions, sizeof directions, "%s%zu direction(s)",
+                      options.directionMode == DirectionMode::Coherent ? "coherent over " : "",
+                      options.directions.size());
+    std::printf("%s: %s, %s, %s, %s, %s hierarchy (leaf %u, branching %u), %s\n", o.scene.c_str(),
+                toString(options.method), viewport, options.depth.name().c_str(), directions,
                 toString(options.hierarchy.kind), options.hierarchy.leafSize, options.hierarchy.branching,
                 backend->describe().c_str());
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
@@ -78,6 +85,10 @@ int runPrune(const PruneOptions& o) {
     nlohmann::ordered_json objectNames = nlohmann::ordered_json::array();
     for (const Object& obj : animation.scene.objects) objectNames.push_back(obj.name);
     if (!o.rebuildHierarchy && last - first > 1) hierarchies = std::make_shared<HierarchyCache>();
+    // Coherent directions learn from frame to frame; one frame is a full check.
+    std::shared_ptr<DirectionHistory> history;
+    if (options.directionMode == DirectionMode::Coherent && last - first > 1)
+        history = std::make_shared<DirectionHistory>();
     for (size_t f = first; f < last; ++f) {
         const size_t done = f - first;
         std::string frameName = "frame ";  // built stepwise: GCC 12's -Wrestrict on "..." + std::string
@@ -88,6 +99,7 @@ int runPrune(const PruneOptions& o) {
         const size_t total = scene.triangleCount(), objectCount = scene.objects.size();
         CullideOptions frameOptions = options;
         frameOptions.hierarchyCache = hierarchies;
+        frameOptions.directionHistory = history;
         // Within a frame, per reducePCS call: a large scene's frame can take minutes. Set only when
         // the bar is drawn, so that a hidden bar leaves the run exactly as it was.
         if (bar.shown())
@@ -139,7 +151,7 @@ int runPrune(const PruneOptions& o) {
             nlohmann::ordered_json pcs = nlohmann::ordered_json::array();
             for (const PcsTriangle& p : r.pcs) pcs.push_back({p.object, p.triangle});
             nlohmann::ordered_json passes = nlohmann::ordered_json::array();
-            for (const PassStats& p : r.passes) passes.push_back(study::passJson(p, options.views != ViewMode::Fit));
+            for (const PassStats& p : r.passes) passes.push_back(study::passJson(p, options));
             frames.push_back({{"frame", f},
                               {"triangles", total},
                               {"pcs", pcs},
@@ -183,6 +195,10 @@ int runPrune(const PruneOptions& o) {
         if (options.autoCoverage > 0) j["options"]["auto_coverage"] = options.autoCoverage;
         // Clustered views (absent for fit, as before the option): each pass records its views.
         if (options.views != ViewMode::Fit) j["options"]["views"] = toString(options.views);
+        // Chosen directions: "directions" is the fixed list (coherent's, or the axes pca falls back
+        // to); each pass records its own direction_vector.
+        if (options.directionMode != DirectionMode::Fixed)
+            j["options"]["direction_mode"] = toString(options.directionMode);
         // The GL and Vulkan backends' descriptions name their driver; the CPU reference rasterizer has none.
         std::vector<std::string> drivers;
         if (o.backend != "cpu") drivers.push_back(backend->describe());

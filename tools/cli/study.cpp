@@ -168,7 +168,9 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("--methods", o->methods, "Methods (as prune --method)");
     sub->add_option("--resolutions", o->resolutions, "Viewports: N or WxH, or auto / auto:K (adaptive)");
     sub->add_option("--depths", o->depths, "Depth formats: 8..32 or float");
-    sub->add_option("--directions", o->directions, "Direction sets: axes, N, or a list (one set per argument)");
+    sub->add_option("--directions", o->directions,
+                    "Direction sets: axes, N, a list, pca or coherent[:LIST] (one set per argument; a study runs "
+                    "each frame alone, so coherent is its full list)");
     sub->add_option("--views", o->views, "View modes: fit | clustered (docs/cullide.md#views-per-cluster)");
     sub->add_option("--hierarchies", o->hierarchies, "connectivity | random");
     sub->add_option("--leaf-sizes", o->leafSizes, "Hierarchy leaf sizes");

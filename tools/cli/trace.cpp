@@ -44,6 +44,8 @@ Json workloadJson(const std::string& scene, const CullideOptions& options) {
     if (options.autoCoverage > 0) j["auto_coverage"] = options.autoCoverage;  // each list's view has its own size
     // Clustered views: a call is one list per group drawn, each with its own view.
     if (options.views != ViewMode::Fit) j["views"] = toString(options.views);
+    // Chosen directions: each list's view has its own direction (recorded with the list).
+    if (options.directionMode != DirectionMode::Fixed) j["direction_mode"] = toString(options.directionMode);
     return j;
 }
 
@@ -64,11 +66,16 @@ Recording recordTrace(const Animation& animation, size_t first, size_t last, con
     raster::TraceRecorder recorder(*cpu, writer, rules, threads);
     Recording out;
     const bool shown = bar && bar->shown();
+    // Coherent directions learn from frame to frame, as in prune; one frame is a full check.
+    std::shared_ptr<DirectionHistory> history;
+    if (options.directionMode == DirectionMode::Coherent && last - first > 1)
+        history = std::make_shared<DirectionHistory>();
     for (size_t f = first; f < last; ++f) {
         std::string frameName = "frame ";
         frameName += std::to_string(f);
         if (shown) bar->update(f - first, frameName);
         CullideOptions frameOptions = options;
+        frameOptions.directionHistory = history;
         // Within a frame, per reducePCS call; set only when the bar is drawn (nothing else changes).
         if (shown)
             frameOptions.onPassStats = [&, directions = options.directions.size()](const PassStats& st) {
@@ -385,7 +392,9 @@ void addCullideOptions(CLI::App* sub, OptionText& o) {
         ->capture_default_str();
     sub->add_option(
            "--directions", o.directions,
-           "View directions: 'axes' (+x -x +y -y +z -z), a count N (spread), or a list 'x,-y,z' / '1 0 0;0 1 1'")
+           "View directions: 'axes' (+x -x +y -y +z -z), a count N (spread), a list 'x,-y,z' / '1 0 0;0 1 1', "
+           "'pca' (per level, the PCS's principal orientations) or 'coherent' / 'coherent:LIST' (across frames, the "
+           "directions that pruned in the last frame; docs/cullide.md#chosen-directions)")
         ->capture_default_str();
     sub->add_option("--hierarchy", o.hierarchy, "connectivity | random")->capture_default_str();
     sub->add_option("--views", o.views,

@@ -117,9 +117,13 @@ int runValidate(const ValidateOptions& o) {
     stage += name;
     stage += " PCS";
     bar.emplace(stage, last - first, "frames", o.progress);
+    // Coherent directions: the GPU run learns from its own frames, as the recording did from its.
+    CullideOptions gpuOptions = options;
+    if (options.directionMode == DirectionMode::Coherent && last - first > 1)
+        gpuOptions.directionHistory = std::make_shared<DirectionHistory>();
     for (size_t f = first; f < last; ++f) {
         const std::vector<PcsTriangle>& ref = recording.pcs[f - first];
-        const CullideResult oth = runCullide(animation.sceneAt(f), *gpu, options);
+        const CullideResult oth = runCullide(animation.sceneAt(f), *gpu, gpuOptions);
         bar->update(f - first + 1);
         const study::Progress::Pause pause(&*bar);  // the frame's line on stdout
         std::vector<PcsTriangle> onlyRef, onlyGl;

@@ -81,10 +81,81 @@ std::vector<Vec3d> axisDirections();
 std::vector<Vec3d> spreadDirections(uint32_t n);
 // Option text (viewports, direction lists, the whole CullideOptions): cullide/options.h.
 
+// A run of triangles [first, first + count) in a geometry's triangle list.
+struct TriangleRange {
+    uint32_t first = 0, count = 0;
+};
+
+struct PassStats;
+
+// Chosen directions (docs/cullide.md#chosen-directions): where each reducePCS call looks.
+enum class DirectionMode : uint8_t {
+    // CullideOptions::directions, in the given order, at every level (the paper's way; the default).
+    Fixed,
+    // Per level, six directions chosen from the current PCS: the principal axes of its triangles'
+    // area-weighted orientation tensor (pcaFrame), turned to the frame that faces the PCS best
+    // (pcaDirections), both signs of each. CullideOptions::directions is not used.
+    Pca,
+    // Across frames (CullideOptions::directionHistory), per level: the directions of
+    // CullideOptions::directions that pruned anything at that level in the previous frame, in the
+    // given order (DirectionHistory::plan), with the full list on the first frame and every
+    // DirectionHistory::period-th frame.
+    Coherent,
+};
+const char* toString(DirectionMode m);  // "fixed" | "pca" | "coherent"
+
+// The principal axes of the orientations of the triangles in `ranges`: the eigenvectors of
+// T = sum over triangles of area * n n^T (n the unit normal), by Eigen's SelfAdjointEigenSolver,
+// largest eigenvalue first, each with its largest-magnitude component positive (the first such on
+// a tie). Summed per piece of at most 4096 triangles and then in piece order: the same for any
+// thread count. Empty when the triangles have no area (or T is not finite).
+std::vector<Vec3d> pcaFrame(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                            std::span<const TriangleRange> ranges);
+// The six directions of DirectionMode::Pca for these triangles: the orthonormal frame that faces
+// them best, as +v1, -v1, +v2, -v2, +v3, -v3 (each v sign-fixed as in pcaFrame). Candidates are
+// the pcaFrame itself and 512 fixed turns of it (64 first axes, the upper half of a 128-direction
+// Fibonacci lattice, x 8 turns about each over a quarter turn), defined in pcaFrame's coordinates
+// so that the choice turns with the geometry. The score of a frame is the area-weighted sum over
+// the triangles of min(1/3, min over its three axes of |n . v|), the normals binned (folded to one
+// sign, a cube map of 3 x 16 x 16 cells, summed per piece as in pcaFrame): a triangle seen nearly
+// edge-on from any axis costs, one faced by at least 1/3 from every axis does not (the most a frame
+// can promise all three principal orientations). The first best candidate wins. The principal
+// axes themselves are no good views: on axis-aligned geometry they are the axes, and for two
+// sheets crossing along a line one axis is that line, seen edge-on by both. No area: the axes.
+std::vector<Vec3d> pcaDirections(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                                 std::span<const TriangleRange> ranges);
+
+// Coherent directions' default period: a full check of the whole list every 8th frame (frames 0,
+// 8, 16, ... of a run of `prune`), so that a direction dropped while it pruned nothing is tried
+// again within 8 frames.
+inline constexpr uint32_t kDefaultCoherentPeriod = 8;
+
+// What DirectionMode::Coherent carries from frame to frame (like HierarchyCache: shared by the
+// frames' options, changed by every run that has it).
+struct DirectionHistory {
+    uint32_t period = kDefaultCoherentPeriod;  // >= 1; 1: every frame is a full check
+    uint64_t frames = 0;  // runs recorded so far
+    size_t count = 0;  // the length of the last run's fixed list
+    // pruned[level][d]: the triangles that direction d of the fixed list pruned at that level of
+    // the last run (the reliable method: in that round).
+    std::vector<std::vector<size_t>> pruned;
+    // The directions (indices into a fixed list of `count`) of this run's calls at `level`, in
+    // order: the full list 0..count-1 on a full check (the first run, every period-th, a list of
+    // another length) or at a level the last run did not reach; otherwise those with pruned > 0
+    // at that level, in the given order: none when nothing pruned there (the level then makes no
+    // call).
+    std::vector<uint32_t> plan(uint32_t level, size_t count) const;
+    // Records a run with a fixed list of `count` directions and what each pruned per level.
+    void record(size_t count, std::vector<std::vector<size_t>> prunedPerLevel);
+};
+
 // One reducePCS call: the data behind the paper's Figures 9-11.
 struct PassStats {
     uint32_t level = 0;  // hierarchy depth of the PCS nodes' level (0: objects)
-    uint32_t direction = 0;  // index into CullideOptions::directions
+    // Index into the level's list of directions: CullideOptions::directions (Fixed, Coherent) or
+    // the level's pcaDirections (Pca).
+    uint32_t direction = 0;
+    Vec3d dirVector = Vec3d::Zero();  // the direction itself (unit)
     size_t nodesIn = 0, nodesOut = 0;
     size_t trianglesIn = 0, trianglesOut = 0;
     size_t trianglesRendered = 0;  // triangles drawn, both passes together
@@ -124,6 +195,9 @@ using PcsTriangle = TriangleRef;
 struct CullideOptions {
     CullMethod method = CullMethod::Modified;
     std::vector<Vec3d> directions = axisDirections();
+    DirectionMode directionMode = DirectionMode::Fixed;
+    // Coherent: the history across frames (runs); empty: every run is a full check (first frame).
+    std::shared_ptr<DirectionHistory> directionHistory;
     // The viewport of every reducePCS call; with adaptive resolution, the smallest one.
     int width = 500, height = 500;
     // Adaptive resolution (`--resolution auto[:K]`): 0 means fixed width x height. Otherwise K,
@@ -169,11 +243,6 @@ CullideResult runCullide(const Scene& scene, DepthBackend& backend, const Cullid
 // The same for a scene the caller gives up (a frame made by Animation::sceneAt): it is emptied as
 // soon as the geometry is uploaded, so that it is not in memory beside the run's own copy.
 CullideResult runCullide(Scene&& scene, DepthBackend& backend, const CullideOptions& options);
-
-// A run of triangles [first, first + count) in a geometry's triangle list.
-struct TriangleRange {
-    uint32_t first = 0, count = 0;
-};
 
 // The commands of one modified reducePCS call (the seed paper's Figure 3), both passes, appended
 // to `list`: forward, each range in order is drawn with LESS, then queried with GREATER against

@@ -64,6 +64,15 @@ Animation makeTwoCows(const Mesh& cow, const SceneRequest& request);
 // request.triangles in all. Frames bow each tube sideways (its own direction and amplitude) as
 // sin(2 pi f / frames): frame 0 is the straight still scene.
 Animation makeCylinders(size_t count, const SceneRequest& request);
+// `count` (> 0) flat square sheets ("sheet_000", ...; unit squares, each a grid of about
+// request.triangles / count triangles, two per cell), nearly parallel: sheet i's normal is +z
+// tilted by tiltDegrees x a seeded factor in [0.5, 1.5] (below 90 degrees) towards a seeded
+// azimuth, so the +-x and +-y views see every sheet nearly edge-on when tiltDegrees is small.
+// Centres: x and y seeded in [-0.15, 0.15], z evenly spaced over [-0.08, 0.08] in a seeded order,
+// each sheet turned about its normal by a seeded angle; neighbours at a few degrees to each other
+// cross, far ones do not. A still scene (docs/cullide.md#chosen-directions: the scene on which
+// axis views lose crossings edge-on).
+Animation makeSheets(size_t count, double tiltDegrees, const SceneRequest& request);
 // A twist of `base` about the longest axis of its bounding box, through the box centre: the angle
 // varies linearly along that axis over +-45 degrees at full twist, and grows from 0 (frame 0: the
 // mesh unchanged) to full (last frame). Coordinates along the axis do not change.

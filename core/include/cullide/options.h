@@ -30,7 +30,9 @@ struct OptionText {
     std::string method = "modified";  // original | modified | reliable
     std::string resolution = "500";  // N or WxH, each side 1..kMaxViewportSide; or auto, auto:K
     std::string depth = "24";  // unorm bits 8..32 (24, d24, unorm24) or float (float, f32, d32f)
-    std::string directions = "axes";  // axes | N (spread) | a list x,-y,z or '1 0 0;0 1 1'
+    // axes | N (spread) | a list x,-y,z or '1 0 0;0 1 1' | pca | coherent, coherent:LIST (any of the
+    // fixed ones; coherent is coherent:axes). docs/cullide.md#chosen-directions.
+    std::string directions = "axes";
     std::string hierarchy = "connectivity";  // connectivity | random
     std::string views = "fit";  // fit | clustered (ViewMode)
     uint32_t leafSize = 16;
@@ -65,7 +67,12 @@ struct ResolutionSetting {
 };
 ResolutionSetting parseResolutionSetting(const std::string& text, const std::string& name = "option --resolution");
 // "axes", "N" (N spread directions, 1..10000), or a list "x,-y,z" / "1 0 0;0 1 1" of non-zero
-// directions (normalized).
+// directions (normalized): CullideOptions::directions. "pca" and "coherent" give the axes,
+// "coherent:LIST" the fixed list LIST (axes, N or a list; the order and set that coherent chooses
+// from).
 std::vector<Vec3d> parseDirections(const std::string& text, const std::string& name = "option --directions");
+// The mode of a directions text: Pca for "pca", Coherent for "coherent" and "coherent:LIST", else
+// Fixed (parseDirections judges the text).
+DirectionMode parseDirectionMode(const std::string& text);
 
 }  // namespace cullide

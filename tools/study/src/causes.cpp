@@ -192,8 +192,9 @@ Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth,
                     if (!ranges.empty() && ranges.back().first + ranges.back().count == g) ++ranges.back().count;
                     else ranges.push_back({uint32_t(g), 1});
                 }
-            views[call] = fitView(world.mesh.positions, world.mesh.triangles, ranges, options.directions[st.direction],
-                                  st.width, st.height, options.depth);  // the call's own viewport
+            // The call's own direction and viewport (with chosen directions, not options.directions).
+            views[call] = fitView(world.mesh.positions, world.mesh.triangles, ranges, st.dirVector, st.width, st.height,
+                                  options.depth);
             directionOf[call] = st.direction;
         }
         inPcs.swap(next);

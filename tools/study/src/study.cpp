@@ -236,7 +236,7 @@ CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names) {
     return parseCullideOptions(t, names);
 }
 
-nlohmann::ordered_json passJson(const PassStats& p, bool views) {
+nlohmann::ordered_json passJson(const PassStats& p, const CullideOptions& options) {
     nlohmann::ordered_json j = {{"level", p.level},
                                 {"direction", p.direction},
                                 {"nodes_in", p.nodesIn},
@@ -249,7 +249,9 @@ nlohmann::ordered_json passJson(const PassStats& p, bool views) {
                                 {"height", p.height},
                                 {"round", p.round},
                                 {"seconds", p.seconds}};
-    if (views) j["views"] = p.views;
+    if (options.views != ViewMode::Fit) j["views"] = p.views;
+    if (options.directionMode != DirectionMode::Fixed)
+        j["direction_vector"] = {p.dirVector.x(), p.dirVector.y(), p.dirVector.z()};
     return j;
 }
 
@@ -344,7 +346,7 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     }
     j["backend_description"] = backend.describe();
     nlohmann::ordered_json passes = nlohmann::ordered_json::array();
-    for (const PassStats& p : r.passes) passes.push_back(passJson(p, options.views != ViewMode::Fit));
+    for (const PassStats& p : r.passes) passes.push_back(passJson(p, options));
     j["passes"] = passes;
     // Not a column of the CSV; like the timings, it differs between runs of one configuration.
     std::vector<std::string> drivers;

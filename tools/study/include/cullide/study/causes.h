@@ -83,7 +83,7 @@ struct MissedPairCause {
     oracle::IntersectingPair pair;
     Cause cause = Cause::Unexplained;
     uint32_t call = 0;  // index of the deciding reducePCS call in CullideResult::passes
-    uint32_t direction = 0;  // its direction (index into CullideOptions::directions)
+    uint32_t direction = 0;  // its direction (PassStats::direction: index into the call's list)
 };
 
 struct Attribution {

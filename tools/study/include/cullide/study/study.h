@@ -107,9 +107,11 @@ size_t studyFrameCount(const std::string& text);
 // Options of a configuration (throws InputError on bad values, naming them by `names`).
 CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names = specOptionNames("study spec"));
 
-// One reducePCS call's statistics as a record's (and prune --json's) "passes" entry; `views`: with
-// its count of views (clustered views only, so that fit's entries stay as they were).
-nlohmann::ordered_json passJson(const PassStats& p, bool views = false);
+// One reducePCS call's statistics as a record's (and prune --json's) "passes" entry, under
+// `options`: with clustered views also its count of views, with chosen directions (pca,
+// coherent) also "direction_vector", the direction itself (so that the default entries stay as
+// they were).
+nlohmann::ordered_json passJson(const PassStats& p, const CullideOptions& options);
 
 // Runs one configuration: `repeats` timed runs, then (with the oracle) one instrumented run for
 // the causes. `truth` may be null when the oracle is off (the measures are then null). Returns
