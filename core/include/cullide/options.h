@@ -35,6 +35,7 @@ struct OptionText {
     uint32_t leafSize = 16;
     uint32_t branching = 4;
     uint64_t seed = 1;  // of the random hierarchy
+    std::string exactSwitch = "never";  // never | auto | N (parseExactSwitch)
 };
 
 // What each value is called in error messages: the source part of InputError.
@@ -46,6 +47,7 @@ struct OptionNames {
     std::string hierarchy = "option --hierarchy";
     std::string leafSize = "option --leaf-size";
     std::string branching = "option --branching";
+    std::string exactSwitch = "option --exact-switch";
 };
 
 // The whole set; throws InputError naming the first bad value (in the order of OptionText).
@@ -65,5 +67,9 @@ ResolutionSetting parseResolutionSetting(const std::string& text, const std::str
 // "axes", "N" (N spread directions, 1..10000), or a list "x,-y,z" / "1 0 0;0 1 1" of non-zero
 // directions (normalized).
 std::vector<Vec3d> parseDirections(const std::string& text, const std::string& name = "option --directions");
+
+// Switch to exact: "never", "auto" (with the default cost model: ExactSwitch::exactCost empty), or
+// N, a triangle count 1..10^12 (stop when the PCS holds fewer than N triangles).
+ExactSwitch parseExactSwitch(const std::string& text, const std::string& name = "option --exact-switch");
 
 }  // namespace cullide
