@@ -33,7 +33,8 @@ namespace cullide::cli {
 namespace {
 
 // One searched option: its column name, prune's option, the candidates (the default among them).
-// Adding a candidate value is one word in `values`; adding an axis, one line (and its setter).
+// Adding a candidate value is one word in `values`; adding an axis, one entry (with its setter).
+// The descent visits the axes in this order.
 struct TuneAxis {
     const char* name;
     const char* option;
@@ -44,6 +45,13 @@ struct TuneAxis {
 
 const std::vector<TuneAxis>& tuneAxes() {
     static const std::vector<TuneAxis> axes = {
+        // First: the switch decides how much the image side must get right, so it changes which
+        // choices of the others meet the target (at never only reliable keeps every pair).
+        {"exact_switch",
+         "--exact-switch",
+         {"never", "auto"},
+         "never",
+         [](study::Spec& s, const std::vector<std::string>& v) { s.exactSwitches = v; }},
         {"method",
          "--method",
          {"original", "modified", "reliable"},
@@ -72,11 +80,6 @@ const std::vector<TuneAxis>& tuneAxes() {
              s.leafSizes.clear();
              for (const std::string& x : v) s.leafSizes.push_back(uint32_t(std::stoul(x)));
          }},
-        {"exact_switch",
-         "--exact-switch",
-         {"never", "auto"},
-         "never",
-         [](study::Spec& s, const std::vector<std::string>& v) { s.exactSwitches = v; }},
     };
     return axes;
 }
@@ -195,6 +198,10 @@ private:
     size_t done_ = 0;
 };
 
+std::string pad(const std::string& s, size_t width) {
+    return s.size() >= width ? s : s + std::string(width - s.size(), ' ');
+}
+
 std::string shellQuote(const std::string& s) {
     if (!s.empty() &&
         s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-./:@,+=") ==
@@ -273,12 +280,16 @@ int runTune(const TuneOptions& o) {
         if (front.empty() || e.second.falsePrunes < front.back().second.falsePrunes) front.push_back(e);
     std::printf("tune %s: %zu configuration(s) measured; Pareto front (time to exact pairs vs false prunes):\n",
                 o.scene.c_str(), all.size());
-    std::printf("  %-9s %-11s %-6s %-10s %-5s %-12s %12s %10s %10s %12s %10s\n", "method", "resolution", "depth",
-                "directions", "leaf", "exact_switch", "time_ms", "prune_ms", "exact_ms", "false_prunes", "pcs");
-    for (const auto& [c, m] : front)
-        std::printf("  %-9s %-11s %-6s %-10s %-5s %-12s %12.2f %10.2f %10.2f %12zu %10zu\n", c[0].c_str(), c[1].c_str(),
-                    c[2].c_str(), c[3].c_str(), c[4].c_str(), c[5].c_str(), m.timeMs, m.pruneMs, m.exactMs,
-                    m.falsePrunes, m.pcs);
+    std::string header = " ";
+    for (const TuneAxis& a : axes) header += " " + pad(a.name, 12);
+    std::printf("%s %10s %10s %10s %12s %10s\n", header.c_str(), "time_ms", "prune_ms", "exact_ms", "false_prunes",
+                "pcs");
+    for (const auto& [c, m] : front) {
+        std::string row = " ";
+        for (const std::string& v : c) row += " " + pad(v, 12);
+        std::printf("%s %10.2f %10.2f %10.2f %12zu %10zu\n", row.c_str(), m.timeMs, m.pruneMs, m.exactMs, m.falsePrunes,
+                    m.pcs);
+    }
     const std::pair<Choice, Measured>* best = nullptr;
     for (const auto& e : all)
         if (tuner.meets(e.second)) {
