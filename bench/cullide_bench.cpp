@@ -17,6 +17,8 @@
 //     seed 1); res 0 = 500 x 500, 1 = `--resolution auto`. Counters: PCS triangles, reducePCS
 //     calls, the most views of a call, and on clustered runs x_fit, this run's time over the fit
 //     run's of the same scene and resolution (run just before it).
+//   BM_PruneToExact/<scene>/<triangles>/<switch>: prune + exact stage, --exact-switch never vs
+//     auto (below); x_never is the acceptance ratio.
 //   BM_Hierarchy/<kind>/<triangles>: building one object's hierarchy (the per-frame cost the
 //     paper's method pays instead of preprocessing); kind 0 = connectivity, 1 = random. Wall
 //     time: nodes of 2^16 triangles and more build their subtrees in parallel. Counters:
@@ -33,7 +35,9 @@
 #include "cullide/cullide.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
+#include "cullide/oracle/oracle.h"
 #include "cullide/raster/cpu_backend.h"
+#include "cullide/study/study.h"
 #include "cullide/scene_io.h"
 
 #include "bench_util.h"
@@ -146,6 +150,44 @@ void BM_Views(benchmark::State& state) {
 BENCHMARK(BM_Views)
     ->ArgNames({"scene", "res", "views"})
     ->ArgsProduct({{0, 1}, {0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Time to exact pairs (issue 17, part 4): prune, then the exact stage (oracle::exactStage) on its
+// PCS, per iteration; switch 0 = never (the whole loop), 1 = auto (the study's calibrated cost
+// model, study::exactStageCostModel, a fresh one per iteration so each pays its calibration).
+// Counters: PCS, the level it switched at (-1: never), prune and exact-stage ms of the last
+// iteration, and on the auto runs x_never = never's wall time per iteration over auto's (the
+// acceptance: > 1), from the never run of the same scene and size just before.
+std::map<std::pair<int64_t, int64_t>, double> neverToExactMs;
+void BM_PruneToExact(benchmark::State& state) {
+    const Scene& scene = paperScene(int(state.range(0)), size_t(state.range(1)));
+    auto backend = raster::makeCpuBackend();
+    CullideOptions o;
+    CullideResult r;
+    double exactSeconds = 0;
+    const auto begin = std::chrono::steady_clock::now();
+    for (auto _ : state) {
+        if (state.range(2) == 1) {
+            o.exactSwitch.kind = ExactSwitchKind::Auto;
+            o.exactSwitch.exactCost = study::exactStageCostModel(scene);
+        }
+        r = runCullide(scene, *backend, o);
+        exactSeconds = oracle::exactStage(scene, r.pcs).totalSeconds;
+    }
+    const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count() /
+        double(state.iterations());
+    state.counters["pcs"] = double(r.pcs.size());
+    state.counters["switched_at"] = double(r.switchedAtLevel);
+    state.counters["prune_ms"] = 1e3 * r.totalSeconds;
+    state.counters["exact_ms"] = 1e3 * exactSeconds;
+    const std::pair<int64_t, int64_t> key{state.range(0), state.range(1)};
+    if (state.range(2) == 0) neverToExactMs[key] = ms;
+    else if (neverToExactMs.count(key)) state.counters["x_never"] = neverToExactMs[key] / ms;
+}
+BENCHMARK(BM_PruneToExact)
+    ->ArgNames({"scene", "tris", "switch"})
+    ->ArgsProduct({{0, 1}, {20000, 270000}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -850,3 +850,50 @@ TEST(Cli, ReportRendersInChromium) {
     EXPECT_EQ(be32(20), 2400u);
     EXPECT_GT(png.size(), 50000u) << "a blank page";
 }
+
+// Trap: a tune that prints a recommendation that prune refuses (an option spelled as the study
+// spells it, a generated scene name), that ignores --max-false-prunes, or that exits 0 when
+// nothing meets the target. On a small bunny file: a Pareto front and a prune command line
+// that itself runs; the recommendation meets K = 0; a budget nothing meets exits 1 with a
+// message (the second tune resumes from the first's output, so it runs nothing new).
+TEST(Cli, TuneRecommendsACommandThatRuns) {
+    const fs::path d = freshDir("tune");
+    const std::string scene = quote((d / "s.json").string());
+    ASSERT_EQ(runCli("make-scene bunny --triangles 1500 -o " + scene).status, 0);
+    const std::string out = quote((d / "t.csv").string());
+    const CliRun r = runCli("tune " + scene + " --repeats 1 --threads 1 --progress never -o " + out);
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("Pareto front"), std::string::npos) << r.output;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(
+        r.output, m,
+        std::regex(
+            R"(cheapest meeting the target \(at most 0 false prune\(s\)\): [0-9.]+ ms to exact pairs, ([0-9]+) false)")))
+        << r.output;
+    EXPECT_EQ(m[1].str(), "0");
+    ASSERT_TRUE(std::regex_search(r.output, m, std::regex("recommended: cullide (prune [^\n]*)"))) << r.output;
+    const CliRun prune = runCli(m[1].str() + " --progress never");
+    EXPECT_EQ(prune.status, 0) << prune.output;
+    EXPECT_NE(prune.output.find("time to exact pairs"), std::string::npos) << prune.output;
+    const CliRun none =
+        runCli("tune " + scene + " --repeats 1 --threads 1 --progress never --budget-ms 0.000001 -o " + out);
+    EXPECT_EQ(none.status, 1) << none.output;
+    EXPECT_NE(none.output.find("no configuration measured meets the target"), std::string::npos) << none.output;
+}
+
+// Trap: tune's bad input reaching the study engine (an exception deep inside) or running for
+// minutes before failing. Each is refused up front with exit status 2, naming the option or file.
+TEST(Cli, TuneRefusesBadInput) {
+    const fs::path d = freshDir("tune_bad");
+    const std::string cow = quote(kData + "/meshes/cow.off");
+    for (const std::string& args :
+         {std::string("tune /nonexistent/scene.json"), "tune " + cow + " --max-false-prunes -1",
+          "tune " + cow + " --max-false-prunes lots", "tune " + cow + " --budget-ms 0", "tune " + cow + " --repeats 0",
+          "tune " + cow + " --threads 5000", "tune " + cow + " -o " + quote((d / "t.txt").string()),
+          "tune " + cow + " --progress sometimes", std::string("tune")}) {
+        const CliRun r = runCli(args);
+        EXPECT_EQ(r.status, 2) << args << "\n" << r.output;
+    }
+    const CliRun missing = runCli("tune /nonexistent/scene.json");
+    EXPECT_NE(missing.output.find("/nonexistent/scene.json"), std::string::npos) << missing.output;
+}

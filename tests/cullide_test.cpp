@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <map>
 #include <memory>
@@ -1087,4 +1088,116 @@ TEST(CullideDirections, CoherentSkipsOnlyCallsAndKeepsTheirPcs) {
         }
     }
     EXPECT_LT(coherentCalls, fixedCalls);
+}
+
+namespace {
+
+// Three overlapping objects with a deep hierarchy (leaf 8, branching 2): many levels to stop in.
+Scene switchScene() {
+    return sceneOf({{icosphere(3), rotation(0.2, 0.3, 0.1)},
+                    {icosphere(3), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))},
+                    {selfCrossingRibbon(81), rotation(0.31, 0.47, 0.23, Vec3f(0.5f, 0, 0))}});
+}
+
+CullideResult pruneWithSwitch(const Scene& scene, CullMethod method, const ExactSwitch& sw, int threads = 0) {
+    raster::CpuBackendOptions bo;
+    bo.threads = threads;
+    auto backend = raster::makeCpuBackend(bo);
+    CullideOptions o;
+    o.method = method;
+    o.width = o.height = 256;
+    o.hierarchy.leafSize = 8;
+    o.hierarchy.branching = 2;
+    o.exactSwitch = sw;
+    return runCullide(scene, *backend, o);
+}
+
+bool isSuperset(const std::vector<PcsTriangle>& big, const std::vector<PcsTriangle>& small) {
+    return std::includes(big.begin(), big.end(), small.begin(), small.end());
+}
+
+}  // namespace
+
+// Trap: a switch that is not checked before every call (only per level), that counts nodes
+// instead of triangles, or that drops nodes when it stops (instead of keeping the PCS as it
+// stands) would stop late or lose triangles. Switch N: the loop stops at the first call whose PCS
+// holds fewer than N triangles (every call before it had at least N), and its PCS is a superset of
+// the whole loop's (it only stops pruning early).
+TEST(CullideExactSwitch, BelowNStopsBeforeTheFirstSmallPcsAndKeepsASuperset) {
+    const Scene s = switchScene();
+    for (CullMethod method : {CullMethod::Original, CullMethod::Modified, CullMethod::Reliable}) {
+        const CullideResult never = pruneWithSwitch(s, method, {});
+        EXPECT_EQ(never.switchedAtLevel, -1);
+        ASSERT_GT(never.passes.size(), 2u) << toString(method);
+        // N between the PCS before the second call and the PCS the loop ends with: it must stop.
+        const size_t n = never.passes[1].trianglesIn;
+        ExactSwitch sw;
+        sw.kind = ExactSwitchKind::Below;
+        sw.triangles = n;
+        const CullideResult r = pruneWithSwitch(s, method, sw);
+        ASSERT_GE(r.switchedAtLevel, 0) << toString(method);
+        EXPECT_LT(r.switchedAtTriangles, n);
+        EXPECT_EQ(r.pcs.size(), r.switchedAtTriangles);
+        for (const PassStats& p : r.passes) EXPECT_GE(p.trianglesIn, n) << toString(method);
+        EXPECT_LT(r.passes.size(), never.passes.size());
+        EXPECT_TRUE(isSuperset(r.pcs, never.pcs)) << toString(method);
+        EXPECT_GT(r.pcs.size(), never.pcs.size()) << toString(method);
+        // N = 1: nothing is ever below it but an empty PCS, so the same run as never.
+        sw.triangles = 1;
+        EXPECT_EQ(pruneWithSwitch(s, method, sw).pcs, never.pcs) << toString(method);
+    }
+}
+
+// Trap: auto's decision inverted, or taken before level 0 has measured anything (no calls to
+// scale). A cost model that says the exact stage is always cheaper stops at the start of level 1
+// (after level 0's calls, all directions); one that says it never is cheaper runs the whole loop,
+// the same PCS and calls as never.
+TEST(CullideExactSwitch, AutoFollowsTheCostModel) {
+    const Scene s = switchScene();
+    const CullideResult never = pruneWithSwitch(s, CullMethod::Modified, {});
+    ExactSwitch sw;
+    sw.kind = ExactSwitchKind::Auto;
+    sw.exactCost = [](size_t) { return 0.0; };  // free: any level costs more
+    const CullideResult cheap = pruneWithSwitch(s, CullMethod::Modified, sw);
+    EXPECT_EQ(cheap.switchedAtLevel, 1);
+    EXPECT_EQ(cheap.levels, 1u);
+    for (const PassStats& p : cheap.passes) EXPECT_EQ(p.level, 0u);
+    EXPECT_EQ(cheap.passes.size(), 6u);
+    EXPECT_TRUE(isSuperset(cheap.pcs, never.pcs));
+    sw.exactCost = [](size_t) { return std::numeric_limits<double>::infinity(); };
+    const CullideResult dear = pruneWithSwitch(s, CullMethod::Modified, sw);
+    EXPECT_EQ(dear.switchedAtLevel, -1);
+    EXPECT_EQ(dear.pcs, never.pcs);
+    EXPECT_EQ(dear.passes.size(), never.passes.size());
+    // The default model (no exactCost) gives a sound PCS whatever the timings decide.
+    sw.exactCost = nullptr;
+    EXPECT_TRUE(isSuperset(pruneWithSwitch(s, CullMethod::Modified, sw).pcs, never.pcs));
+}
+
+// Trap: a switch whose threshold is compared against a count gathered per thread would stop at
+// a different call per thread count. Switch N: the same PCS and calls for 1, 2 and 4 threads.
+TEST(CullideExactSwitch, BelowNDeterministicAcrossThreads) {
+    const Scene s = switchScene();
+    const CullideResult never = pruneWithSwitch(s, CullMethod::Modified, {}, 1);
+    ExactSwitch sw;
+    sw.kind = ExactSwitchKind::Below;
+    sw.triangles = never.passes[never.passes.size() / 2].trianglesIn;  // stops midway
+    const CullideResult one = pruneWithSwitch(s, CullMethod::Modified, sw, 1);
+    ASSERT_GE(one.switchedAtLevel, 0);
+    for (int threads : {2, 4}) {
+        const CullideResult r = pruneWithSwitch(s, CullMethod::Modified, sw, threads);
+        EXPECT_EQ(r.pcs, one.pcs) << threads;
+        EXPECT_EQ(r.passes.size(), one.passes.size()) << threads;
+        EXPECT_EQ(r.switchedAtLevel, one.switchedAtLevel) << threads;
+    }
+}
+
+// Trap: a switch below 1 triangle (never true, so a silent no-op) accepted by validate().
+TEST(CullideExactSwitch, ZeroTrianglesRefused) {
+    const Scene s = sceneOf({{box(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), Transform::Identity()}});
+    auto backend = raster::makeCpuBackend();
+    CullideOptions o;
+    o.exactSwitch.kind = ExactSwitchKind::Below;
+    o.exactSwitch.triangles = 0;
+    EXPECT_THROW(runCullide(s, *backend, o), InputError);
 }

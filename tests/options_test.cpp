@@ -196,3 +196,30 @@ TEST(Options, ChosenDirections) {
         }
     }
 }
+
+// Trap: text the parser half reads ("12abc", "-5", "auto:3", a count past 10^12) taken as a
+// value, or the error named by the default option in a study. never/auto/N read; a bad value
+// is an InputError under the caller's name.
+TEST(Options, ExactSwitch) {
+    for (const char* bad : {"", "0", "-5", "12abc", "auto:3", "Never", "1e6", "99999999999999"}) {
+        try {
+            (void)parseExactSwitch(bad);
+            ADD_FAILURE() << "accepted '" << bad << "'";
+        } catch (const InputError& e) {
+            EXPECT_EQ(e.source(), "option --exact-switch") << bad;
+        }
+    }
+    EXPECT_EQ(parseExactSwitch("never").kind, ExactSwitchKind::Never);
+    EXPECT_EQ(parseExactSwitch("auto").kind, ExactSwitchKind::Auto);
+    EXPECT_EQ(parseExactSwitch("5000").kind, ExactSwitchKind::Below);
+    EXPECT_EQ(parseExactSwitch("5000").triangles, 5000u);
+    OptionText t;
+    EXPECT_EQ(parseCullideOptions(t).exactSwitch.kind, ExactSwitchKind::Never);  // the default
+    t.exactSwitch = "300";
+    EXPECT_EQ(parseCullideOptions(t).exactSwitch.triangles, 300u);
+    t.exactSwitch = "x";
+    OptionNames names;
+    names.exactSwitch = "spec.json: field 'exact_switches'";
+    EXPECT_NE(messageOf([&] { parseCullideOptions(t, names); }).find("spec.json: field 'exact_switches'"),
+              std::string::npos);
+}

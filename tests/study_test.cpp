@@ -249,6 +249,51 @@ TEST(StudyCauses, AdaptiveResolutionFalsePrunesAreExplained) {
     }
 }
 
+// Trap: a new axis that enters every run's key would change the ids of every output written
+// before it (resume and merge key on them), and auto's timing-dependent switch would make the
+// instrumented run prune another PCS than the timed one (every false prune then unexplained).
+// The exact_switches axis: "never" keeps the old key; each run records its switch and its time to
+// exact pairs (prune + exact stage); a switch keeps a superset of never's PCS, and no run has
+// unexplained false prunes. The spec field is read and checked like the others.
+TEST(Study, ExactSwitchAxis) {
+    Spec s;
+    s.scenes = {"cows:3000"};
+    s.resolutions = {"64"};
+    s.exactSwitches = {"never", "auto", "2000"};
+    s.repeats = 1;
+    const std::vector<RunConfig> all = expand(s);
+    ASSERT_EQ(all.size(), 3u);
+    EXPECT_EQ(all[0].key(), "cows:3000|0|modified|64|24|axes|connectivity|16|4|1|cpu|0");
+    EXPECT_EQ(all[1].key(), "cows:3000|0|modified|64|24|axes|connectivity|16|4|1|cpu|0|exact=auto");
+    test::TempDir dir;
+    StudyOptions o;
+    o.spec = s;
+    o.out = dir / "x.csv";
+    runStudy(o);
+    const auto records = readRecords(o.out);
+    ASSERT_EQ(records.size(), 3u);
+    for (const auto& r : records) {
+        EXPECT_EQ(r["fp_unexplained"], 0) << r["exact_switch"];
+        ASSERT_TRUE(r["time_to_exact_ms"].is_number()) << r["exact_switch"];
+        EXPECT_GE(r["time_to_exact_ms"].get<double>(), r["time_ms"].get<double>());
+        EXPECT_GE(r["pcs"].get<size_t>(), records[0]["pcs"].get<size_t>());
+        EXPECT_LE(r["false_prunes"].get<size_t>(), records[0]["false_prunes"].get<size_t>());
+    }
+    EXPECT_TRUE(records[0]["switched_at_level"].is_null());
+    EXPECT_TRUE(records[2]["switched_at_level"].is_number());  // cows:3000 falls below 2000 triangles
+    EXPECT_NE(csvHeader().find(",exact_switch,"), std::string::npos);
+    const Spec parsed =
+        parseSpec(nlohmann::json::parse(R"({"scenes": "cows:800", "exact_switches": ["auto", 500]})"), "spec.json");
+    EXPECT_EQ(parsed.exactSwitches, (std::vector<std::string>{"auto", "500"}));
+    try {
+        (void)parseSpec(nlohmann::json::parse(R"({"scenes": "cows:800", "exact_switches": ["sometimes"]})"),
+                        "spec.json");
+        ADD_FAILURE() << "accepted a bad switch";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("field 'exact_switches'"), std::string::npos) << e.what();
+    }
+}
+
 size_t sumOf(const std::vector<nlohmann::ordered_json>& rows, const char* key) {
     size_t n = 0;
     for (const auto& r : rows) n += r[key].get<size_t>();

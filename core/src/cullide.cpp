@@ -276,6 +276,8 @@ void CullideOptions::validate() const {
                              ") is smaller than the base viewport");
     if (hierarchy.leafSize < 1) throw InputError("option --leaf-size", "the leaf size must be at least 1");
     if (hierarchy.branching < 2) throw InputError("option --branching", "the branching must be at least 2");
+    if (exactSwitch.kind == ExactSwitchKind::Below && exactSwitch.triangles < 1)
+        throw InputError("option --exact-switch", "the switch's triangle count must be at least 1");
 }
 
 void appendModifiedReducePcs(CommandList& list, std::span<const TriangleRange> ranges, std::span<uint32_t> forwardQuery,
@@ -543,13 +545,17 @@ public:
         for (uint32_t i = 0; i < hierarchies_.size(); ++i)
             if (!hierarchies_[i]->nodes.empty() && hierarchies_[i]->nodes[0].count > 0) pcs.push_back(item(i, 0));
 
+        bool switched = false;  // to the exact stage (CullideOptions::exactSwitch)
         for (uint32_t level = 0; !pcs.empty(); ++level) {
-            result.levels = level + 1;
             const std::vector<std::pair<uint32_t, Vec3d>> dirs = callDirections(pcs, level);
             for (size_t k = 0; k < dirs.size() && !pcs.empty(); ++k) {
+                if ((switched = switchNow(pcs, level, k == 0, result))) break;
+                result.levels = level + 1;
                 dir_ = dirs[k].second;
                 pcs = reduce(pcs, level, dirs[k].first, result.passes);
             }
+            if (switched) break;
+            if (dirs.empty()) result.levels = level + 1;  // coherent: a level with no call is still visited
             bool allLeaves = true;
             for (const Item& it : pcs) allLeaves = allLeaves && node(it).isLeaf();
             if (pcs.empty() || allLeaves) break;
@@ -672,6 +678,42 @@ private:
         return out;
     }
 
+    // Switch to exact (ExactSwitch): whether to stop before the next reducePCS call on `pcs`, at
+    // `level`; `groupStart`: the call begins a level (a round for reliable) after the first, where
+    // auto predicts. Records the switch in `result`.
+    bool switchNow(const std::vector<Item>& pcs, uint32_t level, bool groupStart, CullideResult& result) const {
+        const ExactSwitch& sw = opt_.exactSwitch;
+        if (sw.kind == ExactSwitchKind::Never) return false;
+        size_t triangles = 0;
+        for (const Item& it : pcs) triangles += it.range.count;
+        bool stop = false;
+        if (sw.kind == ExactSwitchKind::Below) {
+            stop = triangles < sw.triangles;
+        } else if (sw.kind == ExactSwitchKind::AtLevel) {
+            stop = groupStart && (opt_.method == CullMethod::Reliable ? round_ : level) == sw.level;
+        } else if (groupStart && !result.passes.empty()) {
+            // The last level's (round's) calls: their time, scaled by the PCS's shrinking since,
+            // and the fraction of the PCS they kept.
+            const PassStats& last = result.passes.back();
+            double seconds = 0;
+            size_t first = result.passes.size();
+            while (first > 0 && result.passes[first - 1].level == last.level &&
+                   result.passes[first - 1].round == last.round)
+                seconds += result.passes[--first].seconds;
+            const size_t began = result.passes[first].trianglesIn;
+            const double kept = began ? double(last.trianglesOut) / double(began) : 1;
+            auto exact = [&](size_t n) {
+                return sw.exactCost ? sw.exactCost(n) : double(n) * kExactSecondsPerTriangle;
+            };
+            result.predictedLevelSeconds = began ? seconds * double(triangles) / double(began) : 0;
+            result.predictedExactSeconds = exact(triangles);
+            const double saved = result.predictedExactSeconds - exact(size_t(std::llround(kept * double(triangles))));
+            stop = result.predictedLevelSeconds > saved;  // false when saved is NaN (an infinite model)
+        }
+        if (stop) result.switchedAtLevel = int32_t(level), result.switchedAtTriangles = triangles;
+        return stop;
+    }
+
     const HierarchyNode& node(const Item& it) const { return hierarchies_[it.object]->nodes[it.node]; }
 
     Item item(uint32_t object, uint32_t nodeIndex) const {
@@ -709,14 +751,16 @@ private:
         // With adaptive resolution, rounds of calls until one prunes nothing: each round's views are
         // refitted to the smaller PCS, so its pixels are finer. Every call is sound on its own
         // (docs/reliable.md), so any number of them is.
-        for (round_ = 0;; ++round_) {
+        bool switched = false;  // to the exact stage: before a call, or (auto) before a round after the first
+        for (round_ = 0; !switched; ++round_) {
             const size_t before = pcs.size();
             const std::vector<std::pair<uint32_t, Vec3d>> dirs = callDirections(pcs, round_);
             for (size_t k = 0; k < dirs.size() && !pcs.empty(); ++k) {
+                if ((switched = switchNow(pcs, depth, k == 0 && round_ > 0, result))) break;
                 dir_ = dirs[k].second;
                 pcs = reduceReliable(pcs, depth, dirs[k].first, result.passes);
             }
-            if (opt_.autoCoverage <= 0 || pcs.empty() || pcs.size() == before) break;
+            if (switched || opt_.autoCoverage <= 0 || pcs.empty() || pcs.size() == before) break;
         }
         result.pcs = expand(pcs);
     }

@@ -114,6 +114,23 @@ std::vector<Vec3d> parseDirections(const std::string& text, const std::string& n
     return dirs;
 }
 
+ExactSwitch parseExactSwitch(const std::string& text, const std::string& name) {
+    ExactSwitch s;
+    if (text == "never") return s;
+    if (text == "auto") {
+        s.kind = ExactSwitchKind::Auto;
+        return s;
+    }
+    if (text.empty() || text.size() > 13 || text.find_first_not_of("0123456789") != std::string::npos)
+        throw InputError(name, "cannot read '" + text + "' (expected never, auto or a triangle count N)");
+    const unsigned long long n = std::stoull(text);
+    if (n < 1 || n > 1'000'000'000'000ull)
+        throw InputError(name, "'" + text + "': the triangle count must be 1 to 10^12");
+    s.kind = ExactSwitchKind::Below;
+    s.triangles = size_t(n);
+    return s;
+}
+
 CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& names) {
     CullideOptions o;
     o.method = named(names.method, [&] { return parseCullMethod(text.method); });
@@ -135,6 +152,7 @@ CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& na
     o.hierarchy.leafSize = text.leafSize;
     o.hierarchy.branching = text.branching;
     o.hierarchy.seed = text.seed;
+    o.exactSwitch = parseExactSwitch(text.exactSwitch, names.exactSwitch);
     o.validate();  // nothing left to refuse: the checks above cover it
     return o;
 }

@@ -70,13 +70,14 @@ def load_scene(path):
 
 
 def prune(scene, method="modified", resolution=500, depth="d24", directions="axes", hierarchy="connectivity",
-          leaf_size=16, backend="cpu", threads=0, frame=0, branching=4, seed=1, views="fit"):
+          leaf_size=16, backend="cpu", threads=0, frame=0, branching=4, seed=1, views="fit", exact_switch="never"):
     """Run Cullide on one frame of a scene and return a PruneResult.
 
     The options are the ones of ``cullide prune`` with the same meaning and the same values
     (method: original | modified | reliable; resolution: N or 'WxH'; depth: 'd24', '16', 'float', ...;
     directions: 'axes', N or a list 'x,-y,z'; hierarchy: connectivity | random; backend: cpu | gl;
-    threads: 0 for all cores; views: fit | clustered). The result equals ``cullide prune SCENE --frame F --json``'s PCS bit
+    threads: 0 for all cores; views: fit | clustered; exact_switch: never | auto | N,
+    docs/cullide.md#switch-to-exact). The result equals ``cullide prune SCENE --frame F --json``'s PCS bit
     for bit. ``scene`` is a Scene, or (V, F), or an object with .vertices and .faces.
 
     Result: ``.pcs`` (k, 2) uint32 [object, triangle]; ``.passes`` dict of numpy columns per
@@ -85,7 +86,8 @@ def prune(scene, method="modified", resolution=500, depth="d24", directions="axe
     """
     return _cullide.prune(_as_scene(scene), method=method, resolution=resolution, depth=depth,
                           directions=directions, hierarchy=hierarchy, leaf_size=leaf_size, branching=branching,
-                          seed=seed, backend=backend, threads=threads, frame=frame, views=views)
+                          seed=seed, backend=backend, threads=threads, frame=frame, views=views,
+                          exact_switch=str(exact_switch))
 
 
 def oracle(scene, frame=0):
@@ -135,7 +137,8 @@ def _as_list(value, name):
 
 
 def study(scenes, methods="modified", resolutions=500, depths="24", directions="axes", hierarchies="connectivity",
-          leaf_sizes=16, backends="cpu", threads=0, repeats=3, oracle=True, out="study.csv", views="fit"):
+          leaf_sizes=16, backends="cpu", threads=0, repeats=3, oracle=True, out="study.csv", views="fit",
+          exact_switches="never"):
     """Run a precision study, as ``cullide study`` (docs/studies.md), and return its rows.
 
     Each argument takes one value or a list (the study's axes: every combination runs); scenes are
@@ -155,7 +158,8 @@ def study(scenes, methods="modified", resolutions=500, depths="24", directions="
         _as_list(scenes, "scenes"), _as_list(methods, "methods"), _as_list(resolutions, "resolutions"),
         _as_list(depths, "depths"), _as_list(directions, "directions"), _as_list(hierarchies, "hierarchies"),
         _as_list(leaf_sizes, "leaf_sizes"), _as_list(backends, "backends"), _as_list(threads, "threads"),
-        int(repeats), bool(oracle), _os.fspath(out), _as_list(views, "views"))
+        int(repeats), bool(oracle), _os.fspath(out), _as_list(views, "views"),
+        _as_list(exact_switches, "exact_switches"))
     rows = [json.loads(r) for r in records]
     columns = {}
     for name in _cullide.study_columns():

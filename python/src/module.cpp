@@ -181,6 +181,7 @@ OptionNames pythonNames() {
     n.leafSize = "argument leaf_size";
     n.branching = "argument branching";
     n.views = "argument views";
+    n.exactSwitch = "argument exact_switch";
     return n;
 }
 
@@ -210,7 +211,8 @@ std::unique_ptr<DepthBackend> makeBackendChecked(const std::string& name, int th
 
 PyResult prune(const PyScene& s, const std::string& method, const py::object& resolution, const std::string& depth,
                const std::string& directions, const std::string& hierarchy, long long leafSize, long long branching,
-               long long seed, const std::string& backendName, int threads, long frame, const std::string& views) {
+               long long seed, const std::string& backendName, int threads, long frame, const std::string& views,
+               const std::string& exactSwitch) {
     OptionText text;
     text.method = method;
     text.resolution = resolutionText(resolution);
@@ -222,6 +224,7 @@ PyResult prune(const PyScene& s, const std::string& method, const py::object& re
     text.branching = checkedCount(branching, "argument branching");
     if (seed < 0) fail("argument seed: must be >= 0");
     text.seed = uint64_t(seed);
+    text.exactSwitch = exactSwitch;
     PyResult r;
     r.options = parseCullideOptions(text, pythonNames());
     r.backend = backendName;
@@ -230,7 +233,10 @@ PyResult prune(const PyScene& s, const std::string& method, const py::object& re
     r.scene = s.at(frame);
     std::unique_ptr<DepthBackend> backend = makeBackendChecked(backendName, threads);
     py::gil_scoped_release release;
-    r.result = runCullide(r.scene, *backend, r.options);
+    // Auto's cost model reads the scene: given to this run only (r moves on return).
+    CullideOptions run = r.options;
+    if (run.exactSwitch.kind == ExactSwitchKind::Auto) run.exactSwitch.exactCost = study::exactStageCostModel(r.scene);
+    r.result = runCullide(r.scene, *backend, run);
     return r;
 }
 
@@ -518,12 +524,18 @@ PYBIND11_MODULE(_cullide, m) {
         .def_property_readonly(
             "levels", [](const PyResult& r) { return r.result.levels; }, "Hierarchy levels visited.")
         .def_property_readonly(
+            "switched_at_level",
+            [](const PyResult& r) {
+                return r.result.switchedAtLevel < 0 ? py::object(py::none()) : py::int_(r.result.switchedAtLevel);
+            },
+            "With exact_switch: the level at which pruning stopped early for the exact stage (None: it did not).")
+        .def_property_readonly(
             "frame", [](const PyResult& r) { return r.frame; }, "The frame pruned.");
 
     m.def("prune", &prune, py::arg("scene"), py::arg("method") = "modified", py::arg("resolution") = py::int_(500),
           py::arg("depth") = "d24", py::arg("directions") = "axes", py::arg("hierarchy") = "connectivity",
           py::arg("leaf_size") = 16, py::arg("branching") = 4, py::arg("seed") = 1, py::arg("backend") = "cpu",
-          py::arg("threads") = 0, py::arg("frame") = 0, py::arg("views") = "fit",
+          py::arg("threads") = 0, py::arg("frame") = 0, py::arg("views") = "fit", py::arg("exact_switch") = "never",
           "Runs Cullide on one frame (see the package's prune).");
 
     m.def("oracle", &oracleOf, py::arg("scene"), py::arg("frame") = 0,
@@ -538,7 +550,7 @@ PYBIND11_MODULE(_cullide, m) {
            const std::vector<std::string>& directions, const std::vector<std::string>& hierarchies,
            const std::vector<uint32_t>& leafSizes, const std::vector<std::string>& backends,
            const std::vector<int>& threads, int repeats, bool oracle, const std::string& out,
-           const std::vector<std::string>& views) {
+           const std::vector<std::string>& views, const std::vector<std::string>& exactSwitches) {
             if (scenes.empty()) fail("argument scenes: no scenes");
             if (repeats < 1) fail("argument repeats: must be >= 1");
             study::StudyOptions o;
@@ -552,6 +564,7 @@ PYBIND11_MODULE(_cullide, m) {
             s.scenes = scenes, s.methods = methods, s.resolutions = resolutions, s.depths = depths;
             s.directions = directions, s.hierarchies = hierarchies, s.leafSizes = leafSizes;
             s.backends = backends, s.threads = threads, s.repeats = repeats, s.oracle = oracle;
+            s.exactSwitches = exactSwitches, s.names.exactSwitch = "argument exact_switches";
             for (const std::string& b : backends)
                 if (!raster::isBackendName(b))
                     fail("argument backends: '" + b + "' is not a backend (" + raster::backendNameList() + ")");
@@ -568,6 +581,7 @@ PYBIND11_MODULE(_cullide, m) {
         py::arg("scenes"), py::arg("methods"), py::arg("resolutions"), py::arg("depths"), py::arg("directions"),
         py::arg("hierarchies"), py::arg("leaf_sizes"), py::arg("backends"), py::arg("threads"), py::arg("repeats"),
         py::arg("oracle"), py::arg("out"), py::arg("views") = std::vector<std::string>{"fit"},
+        py::arg("exact_switches") = std::vector<std::string>{"never"},
         "Runs a study (see the package's study); returns the records as JSON texts.");
     m.def(
         "study_columns", [] { return study::columns(); }, "The study CSV's columns, in order.");

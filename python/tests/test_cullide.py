@@ -268,6 +268,23 @@ def test_study(tmp_path):
         cullide.study("cows:500", views="cluster", repeats=1, out=tmp_path / "u.csv")
 
 
+# Trap: the exact switch lost between Python and the core (the keyword ignored, so the default
+# runs) or its bad value not named. A switch below the whole mesh keeps a superset of never's PCS
+# and says where it stopped; the study's axis records each run's switch and time to exact pairs.
+def test_exact_switch(tmp_path):
+    scene = cullide.load_scene(COW)
+    never = cullide.prune(scene, resolution=128)
+    stopped = cullide.prune(scene, resolution=128, exact_switch=1000000)
+    assert never.switched_at_level is None
+    assert stopped.switched_at_level == 0
+    assert {tuple(p) for p in never.pcs} <= {tuple(p) for p in stopped.pcs}
+    with pytest.raises(ValueError, match="exact_switch"):
+        cullide.prune(scene, exact_switch="sometimes")
+    rows = cullide.study("cows:500", resolutions=64, repeats=1, out=tmp_path / "x.csv", exact_switches=["never", 100])
+    assert list(rows["exact_switch"]) == ["never", "100"]
+    assert all(t >= 0 for t in rows["time_to_exact_ms"])
+
+
 # Trap: the backend interface from Python: two overlapping quads, the far one drawn first, the
 # near one's samples pass (LESS); depth readback shape (h, w); queries numbered in order.
 def test_cpu_backend_and_command_list():

@@ -78,5 +78,6 @@ void addStudyCommand(CLI::App& app, Action& action);
 void addPlotCommand(CLI::App& app, Action& action);
 void addTraceCommand(CLI::App& app, Action& action);
 void addReportCommand(CLI::App& app, Action& action);
+void addTuneCommand(CLI::App& app, Action& action);
 
 }  // namespace cullide::cli

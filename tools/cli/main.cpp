@@ -73,6 +73,7 @@ int run(int argc, char** argv) {
     cullide::cli::addPlotCommand(app, action);
     cullide::cli::addTraceCommand(app, action);
     cullide::cli::addReportCommand(app, action);
+    cullide::cli::addTuneCommand(app, action);
 
     try {
         app.parse(argc, argv);

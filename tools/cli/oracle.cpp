@@ -158,6 +158,7 @@ PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const Cu
     }
     if (exact) {
         const oracle::Truth t = oracle::exactStage(scene, pcs);
+        out.exactSeconds = t.totalSeconds;
         std::printf(
             "  exact: %zu intersecting pair(s) among the PCS (%zu crossing, %zu touching), %zu degenerate "
             "triangle(s); %.1f ms\n",

@@ -12,6 +12,7 @@ namespace cullide::cli {
 struct PcsCheck {
     nlohmann::ordered_json json;  // {"check": {...}} and/or {"exact": {...}}
     bool guaranteeBroken = false;  // a false prune of a pair the method promises to keep
+    double exactSeconds = 0;  // --exact: the exact stage's time
 };
 
 // Prints one line per requested measure and returns them as JSON. --check: false prunes by class

@@ -72,10 +72,13 @@ int runPrune(const PruneOptions& o) {
         std::snprintf(directions, sizeof directions, "%s%zu direction(s)",
                       options.directionMode == DirectionMode::Coherent ? "coherent over " : "",
                       options.directions.size());
-    std::printf("%s: %s, %s, %s, %s, %s hierarchy (leaf %u, branching %u), %s\n", o.scene.c_str(),
+    // The switch is named only when set: a default run prints what it always printed.
+    std::string exactSwitch;
+    if (options.exactSwitch.kind != ExactSwitchKind::Never) exactSwitch = ", exact switch " + o.cullide.exactSwitch;
+    std::printf("%s: %s, %s, %s, %s, %s hierarchy (leaf %u, branching %u)%s, %s\n", o.scene.c_str(),
                 toString(options.method), viewport, options.depth.name().c_str(), directions,
                 toString(options.hierarchy.kind), options.hierarchy.leafSize, options.hierarchy.branching,
-                backend->describe().c_str());
+                exactSwitch.c_str(), backend->describe().c_str());
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
     bool guaranteeBroken = false;  // --check found a false prune the method promises not to make
     study::Progress bar("prune", last - first, "frames", o.progress);
@@ -100,6 +103,9 @@ int runPrune(const PruneOptions& o) {
         CullideOptions frameOptions = options;
         frameOptions.hierarchyCache = hierarchies;
         frameOptions.directionHistory = history;
+        // Auto's exact-stage cost, calibrated on this frame (timed inside the run when it predicts).
+        if (options.exactSwitch.kind == ExactSwitchKind::Auto)
+            frameOptions.exactSwitch.exactCost = study::exactStageCostModel(scene);
         // Within a frame, per reducePCS call: a large scene's frame can take minutes. Set only when
         // the bar is drawn, so that a hidden bar leaves the run exactly as it was.
         if (bar.shown())
@@ -147,6 +153,14 @@ int runPrune(const PruneOptions& o) {
                 : r.hierarchiesReused == objectCount ? " (reused)"
                                                      : " (some reused)",
             1e3 * r.totalSeconds);
+        if (r.switchedAtLevel >= 0 && options.exactSwitch.kind == ExactSwitchKind::Auto)
+            std::printf(
+                "  switched to exact at level %d with %zu PCS triangles (predicted: next level %.2f ms, "
+                "exact stage %.2f ms)\n",
+                r.switchedAtLevel, r.switchedAtTriangles, 1e3 * r.predictedLevelSeconds, 1e3 * r.predictedExactSeconds);
+        else if (r.switchedAtLevel >= 0)
+            std::printf("  switched to exact at level %d with %zu PCS triangles\n", r.switchedAtLevel,
+                        r.switchedAtTriangles);
         if (!o.json.empty()) {
             nlohmann::ordered_json pcs = nlohmann::ordered_json::array();
             for (const PcsTriangle& p : r.pcs) pcs.push_back({p.object, p.triangle});
@@ -160,6 +174,9 @@ int runPrune(const PruneOptions& o) {
                               {"hierarchy_seconds", r.hierarchySeconds},
                               {"hierarchies_reused", r.hierarchiesReused},
                               {"total_seconds", r.totalSeconds}});
+            if (options.exactSwitch.kind != ExactSwitchKind::Never)
+                frames.back()["switched_at_level"] =
+                    r.switchedAtLevel >= 0 ? nlohmann::ordered_json(r.switchedAtLevel) : nlohmann::ordered_json();
         }
         if (o.check || o.exact) {
             pause.reset();
@@ -170,6 +187,16 @@ int runPrune(const PruneOptions& o) {
             const PcsCheck c = checkPcs(scene, r.pcs, options, o.check, o.exact);
             guaranteeBroken = guaranteeBroken || c.guaranteeBroken;
             if (!o.json.empty()) frames.back().update(c.json);
+            if (o.exact) {
+                // The pipeline's latency: image-space pruning, then the exact stage on its PCS.
+                const double toExact = r.totalSeconds + c.exactSeconds;
+                std::printf("  time to exact pairs: %.1f ms (prune %.1f + exact stage %.1f)\n", 1e3 * toExact,
+                            1e3 * r.totalSeconds, 1e3 * c.exactSeconds);
+                if (!o.json.empty()) {
+                    frames.back()["exact_seconds"] = c.exactSeconds;
+                    frames.back()["time_to_exact_pairs_seconds"] = toExact;
+                }
+            }
         }
         if (!o.out.empty()) writePcsPly(scene, r.pcs, o.out);
         pause.reset();
@@ -199,6 +226,7 @@ int runPrune(const PruneOptions& o) {
         // to); each pass records its own direction_vector.
         if (options.directionMode != DirectionMode::Fixed)
             j["options"]["direction_mode"] = toString(options.directionMode);
+        if (options.exactSwitch.kind != ExactSwitchKind::Never) j["options"]["exact_switch"] = o.cullide.exactSwitch;
         // The GL and Vulkan backends' descriptions name their driver; the CPU reference rasterizer has none.
         std::vector<std::string> drivers;
         if (o.backend != "cpu") drivers.push_back(backend->describe());
@@ -234,7 +262,13 @@ void addPruneCommand(CLI::App& app, Action& action) {
     sub->add_flag("--rebuild-hierarchy", o->rebuildHierarchy,
                   "Build every frame's hierarchies, as the paper does (default: an object whose triangles are "
                   "unchanged since the last frame keeps its hierarchy; the PCS is the same either way)");
-    sub->add_flag("--exact", o->exact, "Run the exact stage on the PCS: the final intersecting pairs of the pipeline");
+    sub->add_flag("--exact", o->exact,
+                  "Run the exact stage on the PCS: the final intersecting pairs of the pipeline, and the time to them");
+    sub->add_option("--exact-switch", o->cullide.exactSwitch,
+                    "Stop image-space pruning early and leave the rest to the exact stage: never | auto (when the "
+                    "next level is predicted to cost more than the exact stage on the PCS) | N (when the PCS holds "
+                    "fewer than N triangles); docs/cullide.md#switch-to-exact")
+        ->capture_default_str();
     addProgressOption(sub, o->progress);
     sub->callback([o, sub, &action] {
         checkCullideOptions(sub, o->cullide);

@@ -18,7 +18,8 @@ namespace {
 struct StudyCliOptions {
     std::string spec;
     std::string preset;
-    std::vector<std::string> scenes, methods, resolutions, depths, directions, views, hierarchies, backends;
+    std::vector<std::string> scenes, methods, resolutions, depths, directions, views, hierarchies, backends,
+        exactSwitches;
     std::vector<uint32_t> leafSizes;
     std::vector<int> threads;
     int repeats = 0;  // 0: the spec's
@@ -54,6 +55,7 @@ study::Spec buildSpec(const StudyCliOptions& o) {
     if (!o.views.empty()) s.views = o.views, s.names.views = "option --views";
     if (!o.hierarchies.empty()) s.hierarchies = o.hierarchies, s.names.hierarchy = "option --hierarchies";
     if (!o.leafSizes.empty()) s.leafSizes = o.leafSizes, s.names.leafSize = "option --leaf-sizes";
+    if (!o.exactSwitches.empty()) s.exactSwitches = o.exactSwitches, s.names.exactSwitch = "option --exact-switches";
     if (!o.backends.empty()) s.backends = o.backends;
     if (!o.threads.empty()) s.threads = o.threads;
     if (o.repeats > 0) s.repeats = o.repeats;
@@ -109,8 +111,9 @@ void refuseInapplicable(const StudyCliOptions& o, const CLI::App& sub) {
         return;
     }
     if (!o.spec.empty()) throw CLI::ValidationError("spec", "a study spec does not apply to --stability");
-    for (const char* name : {"--preset", "--resolutions", "--views", "--hierarchies", "--leaf-sizes", "--backends",
-                             "--threads", "--repeats", "--no-oracle", "--shard", "--progress"})
+    for (const char* name :
+         {"--preset", "--resolutions", "--views", "--hierarchies", "--leaf-sizes", "--exact-switches", "--backends",
+          "--threads", "--repeats", "--no-oracle", "--shard", "--progress"})
         refuse(name, "does not apply to --stability");
     if (o.stability != "tilt") refuse("--directions", "applies to --stability tilt only");
     if (o.stability != "jitter") refuse("--scenes", "applies to --stability jitter only");
@@ -140,9 +143,18 @@ int runStudyCommand(const StudyCliOptions& o) {
             causes = " false prunes " + r["false_prunes"].dump() + " (depth " + r["fp_depth_rounding"].dump() +
                 ", sampling " + r["fp_sampling"].dump() + ", edge-on " + r["fp_edge_on"].dump() + ", untested " +
                 r["fp_untested"].dump() + ", unexplained " + r["fp_unexplained"].dump() + ")";
-        std::printf("%s %s %s %s %s: %.1f ms, %s calls, PCS %s of %s;%s\n", r["scene"].get<std::string>().c_str(),
+        // The switch is named only when set, and the time to exact pairs only when the oracle ran.
+        std::string exact;
+        if (r.value("exact_switch", "never") != "never")
+            exact = " exact switch " + r["exact_switch"].get<std::string>();
+        if (r.contains("time_to_exact_ms") && r["time_to_exact_ms"].is_number()) {
+            char text[64];
+            std::snprintf(text, sizeof text, ", %.1f ms to exact pairs", r["time_to_exact_ms"].get<double>());
+            causes += text;
+        }
+        std::printf("%s %s %s %s %s%s: %.1f ms, %s calls, PCS %s of %s;%s\n", r["scene"].get<std::string>().c_str(),
                     r["method"].get<std::string>().c_str(), r["resolution"].get<std::string>().c_str(),
-                    r["depth"].get<std::string>().c_str(), r["directions"].get<std::string>().c_str(),
+                    r["depth"].get<std::string>().c_str(), r["directions"].get<std::string>().c_str(), exact.c_str(),
                     r["time_ms"].get<double>(), r["calls"].dump().c_str(), r["pcs"].dump().c_str(),
                     r["triangles"].dump().c_str(), causes.c_str());
         std::fflush(stdout);
@@ -174,6 +186,9 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_option("--views", o->views, "View modes: fit | clustered (docs/cullide.md#views-per-cluster)");
     sub->add_option("--hierarchies", o->hierarchies, "connectivity | random");
     sub->add_option("--leaf-sizes", o->leafSizes, "Hierarchy leaf sizes");
+    sub->add_option("--exact-switches", o->exactSwitches,
+                    "Switches to exact: never, auto or N (as prune --exact-switch); with the oracle, each run records "
+                    "its time to exact pairs");
     sub->add_option("--backends", o->backends, "Backends: " + raster::backendNameList());
     sub->add_option("--threads", o->threads, "Worker threads per run (0: all cores)");
     sub->add_option("--repeats", o->repeats, "Timed runs per configuration (median, min, max)")

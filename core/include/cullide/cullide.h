@@ -23,6 +23,7 @@
 //   - The loop (Figure 1): start from the objects' roots; for each level, run reducePCS once per
 //     direction (in the given order) on the current PCS; stop when the PCS is empty or holds only
 //     leaves (the leaves have then been tested too); otherwise replace every node by its children.
+//     An exact switch (ExactSwitch) may stop it earlier, the PCS as it stands.
 //   - Deterministic: same scene, options and backend results, same PCS.
 #pragma once
 
@@ -192,6 +193,39 @@ ViewMode parseViewMode(const std::string& text);  // "fit" | "clustered"; InputE
 // A PCS entry: a triangle of the scene (scene.h).
 using PcsTriangle = TriangleRef;
 
+// Switch to exact (`--exact-switch`, docs/cullide.md#switch-to-exact): when to stop image-space
+// pruning and leave the rest to the exact stage. Stopping early only keeps nodes that later calls
+// might have pruned, so the PCS is still a superset of the PCS the whole loop would keep (and as
+// sound: the same promise, promisesToKeep); the exact stage's pairs on it are the same or more
+// true pairs, never fewer.
+enum class ExactSwitchKind : uint8_t {
+    Never,  // the whole loop (the default; bit-identical to a run without the switch)
+    Below,  // before each reducePCS call: stop when the PCS holds fewer than `triangles` triangles
+    Auto,  // before each level after the first (each round of reliable's): the cost model below
+    AtLevel,  // before level `level` (reliable: round `level`): replays an auto run's decision exactly
+};
+// The exact stage's cost in seconds per PCS triangle that `auto` assumes when no exactCost is
+// given (the tools give a model calibrated on the scene): the oracle's exact stage
+// (oracle::exactStage) on the whole 70k bunny and 70k two cows, 1.3-1.6 us per triangle on a
+// shared two-core machine (docs/cullide.md#switch-to-exact). A fallback: the cost per triangle
+// varies with the scene (12 us on data/scenes/two_cows_and_bunny.json).
+inline constexpr double kExactSecondsPerTriangle = 1.5e-6;
+struct ExactSwitch {
+    ExactSwitchKind kind = ExactSwitchKind::Never;
+    size_t triangles = 0;  // Below: the threshold N (at least 1)
+    uint32_t level = 0;  // AtLevel
+    // Auto: the predicted seconds of the exact stage on a PCS of n triangles (the caller's model:
+    // core cannot run the oracle). Empty: n * kExactSecondsPerTriangle. Auto stops when the next
+    // level's predicted time, all directions, exceeds the exact-stage time it is predicted to save,
+    // exactCost(n) - exactCost(r n), n the PCS triangles and r the fraction of them the last level
+    // kept (docs/cullide.md#switch-to-exact: with a PCS that keeps shrinking by r per level, no
+    // later stop beats stopping now when this holds, and none is worse when it does not). The next
+    // level's time is the last level's measured time (PassStats::seconds) scaled by how much
+    // smaller the PCS is now than when that level began. Depends on timings: the PCS may differ
+    // between runs (CullideResult records where it stopped; AtLevel replays it).
+    std::function<double(size_t)> exactCost;
+};
+
 struct CullideOptions {
     CullMethod method = CullMethod::Modified;
     std::vector<Vec3d> directions = axisDirections();
@@ -221,9 +255,10 @@ struct CullideOptions {
     // triangles are unchanged (hierarchy.h): the same PCS, bit for bit, without the per-frame
     // build. Empty: every run builds its hierarchies, as the paper does.
     std::shared_ptr<HierarchyCache> hierarchyCache;
+    ExactSwitch exactSwitch;
     // Throws InputError naming the option on absurd values (no directions, a zero or non-finite
     // direction, a viewport outside 1..kMaxViewportSide, an adaptive K outside (0, kMaxAutoCoverage]
-    // or a budget smaller than width x height).
+    // or a budget smaller than width x height, an exact switch below 1 triangle).
     void validate() const;
 };
 
@@ -234,6 +269,11 @@ struct CullideResult {
     uint32_t hierarchiesReused = 0;  // objects whose hierarchy came from options.hierarchyCache
     double totalSeconds = 0;  // everything, hierarchy and geometry upload included
     uint32_t levels = 0;  // hierarchy levels visited
+    // Switch to exact: the level at which the loop stopped early (-1: it did not), the PCS
+    // triangles then, and (auto) the two predictions that decided it.
+    int32_t switchedAtLevel = -1;
+    size_t switchedAtTriangles = 0;
+    double predictedLevelSeconds = 0, predictedExactSeconds = 0;
 };
 
 // Computes the PCS of `scene` with `backend`. Throws InputError on bad options, and

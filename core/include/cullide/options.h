@@ -38,6 +38,7 @@ struct OptionText {
     uint32_t leafSize = 16;
     uint32_t branching = 4;
     uint64_t seed = 1;  // of the random hierarchy
+    std::string exactSwitch = "never";  // never | auto | N (parseExactSwitch)
 };
 
 // What each value is called in error messages: the source part of InputError.
@@ -50,6 +51,7 @@ struct OptionNames {
     std::string views = "option --views";
     std::string leafSize = "option --leaf-size";
     std::string branching = "option --branching";
+    std::string exactSwitch = "option --exact-switch";
 };
 
 // The whole set; throws InputError naming the first bad value (in the order of OptionText).
@@ -74,5 +76,9 @@ std::vector<Vec3d> parseDirections(const std::string& text, const std::string& n
 // The mode of a directions text: Pca for "pca", Coherent for "coherent" and "coherent:LIST", else
 // Fixed (parseDirections judges the text).
 DirectionMode parseDirectionMode(const std::string& text);
+
+// Switch to exact: "never", "auto" (with the default cost model: ExactSwitch::exactCost empty), or
+// N, a triangle count 1..10^12 (stop when the PCS holds fewer than N triangles).
+ExactSwitch parseExactSwitch(const std::string& text, const std::string& name = "option --exact-switch");
 
 }  // namespace cullide

@@ -121,6 +121,9 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
             s.hierarchies = r.texts(v, key, parseHierarchyKind);
         } else if (key == "leaf_sizes") {
             s.leafSizes = r.integers<uint32_t>(v, key, 1, kMaxLeafSize);
+        } else if (key == "exact_switches") {
+            s.exactSwitches = r.texts(
+                v, key, [](const std::string& t) { return parseExactSwitch(t); }, 1, 1'000'000'000'000);
         } else if (key == "backends") {
             s.backends = r.texts(v, key, [](const std::string& b) {
                 if (!raster::isBackendName(b)) throw InputError("backend", "'" + b + "': " + raster::backendNameList());
@@ -142,9 +145,8 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
         } else {
             throw InputError(source,
                              "unknown field '" + key +
-                                 "' (fields: scenes, methods, resolutions, depths, "
-                                 "directions, views, hierarchies, leaf_sizes, backends, threads, branching, seed, "
-                                 "repeats, oracle)");
+                                 "' (fields: scenes, methods, resolutions, depths, directions, views, hierarchies, "
+                                 "leaf_sizes, exact_switches, backends, threads, branching, seed, repeats, oracle)");
         }
     }
     return s;

@@ -102,7 +102,7 @@ OptionNames specOptionNames(const std::string& source) {
     OptionNames n;
     n.method = field("methods"), n.resolution = field("resolutions"), n.depth = field("depths");
     n.directions = field("directions"), n.hierarchy = field("hierarchies"), n.leafSize = field("leaf_sizes");
-    n.branching = field("branching"), n.views = field("views");
+    n.branching = field("branching"), n.views = field("views"), n.exactSwitch = field("exact_switches");
     return n;
 }
 
@@ -123,6 +123,7 @@ std::string RunConfig::key() const {
     k << scene << '|' << frame << '|' << method << '|' << resolution << '|' << depth << '|' << directions << '|'
       << hierarchy << '|' << leafSize << '|' << branching << '|' << seed << '|' << backend << '|' << threads;
     if (views != "fit") k << "|views=" << views;
+    if (exactSwitch != "never") k << "|exact=" << exactSwitch;  // the defaults keep the ids they always had
     return k.str();
 }
 
@@ -166,6 +167,7 @@ std::vector<RunConfig> expand(const Spec& spec) {
     nonEmpty(spec.methods, "methods"), nonEmpty(spec.resolutions, "resolutions"), nonEmpty(spec.depths, "depths");
     nonEmpty(spec.directions, "directions"), nonEmpty(spec.hierarchies, "hierarchies"), nonEmpty(spec.views, "views");
     nonEmpty(spec.leafSizes, "leaf sizes"), nonEmpty(spec.backends, "backends"), nonEmpty(spec.threads, "threads");
+    nonEmpty(spec.exactSwitches, "exact switches");
     for (const std::string& b : spec.backends)
         if (!raster::isBackendName(b))
             throw InputError("study spec", "backend '" + b + "': " + raster::backendNameList());
@@ -197,16 +199,17 @@ std::vector<RunConfig> expand(const Spec& spec) {
                             for (const auto& v : spec.views)
                                 for (const auto& h : spec.hierarchies)
                                     for (uint32_t leaf : spec.leafSizes)
-                                        for (const auto& b : spec.backends)
-                                            for (int t : spec.threads) {
-                                                RunConfig c;
-                                                c.index = out.size();
-                                                c.scene = scene, c.frame = frame, c.method = m, c.resolution = r;
-                                                c.depth = d, c.directions = dir, c.views = v, c.hierarchy = h;
-                                                c.leafSize = leaf, c.branching = spec.branching, c.seed = spec.seed;
-                                                c.backend = b, c.threads = t;
-                                                out.push_back(c);
-                                            }
+                                        for (const auto& x : spec.exactSwitches)
+                                            for (const auto& b : spec.backends)
+                                                for (int t : spec.threads) {
+                                                    RunConfig c;
+                                                    c.index = out.size();
+                                                    c.scene = scene, c.frame = frame, c.method = m, c.resolution = r;
+                                                    c.depth = d, c.directions = dir, c.views = v, c.hierarchy = h;
+                                                    c.leafSize = leaf, c.branching = spec.branching, c.seed = spec.seed;
+                                                    c.backend = b, c.threads = t, c.exactSwitch = x;
+                                                    out.push_back(c);
+                                                }
     }
     for (const RunConfig& c : out) (void)cullideOptions(c, spec.names);  // every value checked before any run
     return out;
@@ -233,7 +236,44 @@ CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names) {
     t.method = c.method, t.resolution = c.resolution, t.depth = c.depth, t.directions = c.directions;
     t.hierarchy = c.hierarchy, t.leafSize = c.leafSize, t.branching = c.branching, t.seed = c.seed;
     t.views = c.views;
+    t.exactSwitch = c.exactSwitch;
     return parseCullideOptions(t, names);
+}
+
+std::function<double(size_t)> exactStageCostModel(const Scene& scene) {
+    auto perTriangle = std::make_shared<double>(-1);  // shared by the copies std::function makes
+    return [&scene, perTriangle](size_t n) {
+        if (*perTriangle < 0) {
+            std::vector<std::pair<oracle::TriangleRef, Vec3d>> centroids;
+            for (uint32_t i = 0; i < scene.objects.size(); ++i) {
+                const Mesh m = scene.worldMesh(i);
+                for (uint32_t t = 0; t < m.triangles.size(); ++t) {
+                    Vec3d c = Vec3d::Zero();
+                    for (uint32_t v : m.triangles[t]) c += m.positions[v].cast<double>();
+                    centroids.push_back({{i, t}, c / 3});
+                }
+            }
+            const size_t total = centroids.size(), k = std::min(total, std::max<size_t>(2048, total / 16));
+            if (k == 0) return *perTriangle = 0;
+            Vec3d median;
+            std::vector<double> axis(total);
+            for (int a = 0; a < 3; ++a) {
+                for (size_t i = 0; i < total; ++i) axis[i] = centroids[i].second[a];
+                std::nth_element(axis.begin(), axis.begin() + ptrdiff_t(total / 2), axis.end());
+                median[a] = axis[total / 2];
+            }
+            std::nth_element(centroids.begin(), centroids.begin() + ptrdiff_t(k - 1), centroids.end(),
+                             [&](const auto& a, const auto& b) {
+                                 return (a.second - median).template lpNorm<Eigen::Infinity>() <
+                                     (b.second - median).template lpNorm<Eigen::Infinity>();
+                             });
+            std::vector<oracle::TriangleRef> sample;
+            for (size_t i = 0; i < k; ++i) sample.push_back(centroids[i].first);
+            std::sort(sample.begin(), sample.end());
+            *perTriangle = oracle::exactStage(scene, sample).totalSeconds / double(k);
+        }
+        return double(n) * *perTriangle;
+    };
 }
 
 nlohmann::ordered_json passJson(const PassStats& p, const CullideOptions& options) {
@@ -263,8 +303,11 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     std::vector<std::pair<double, CullideResult>> timed;
     for (int k = 0; k < repeats; ++k) {
         executeIn(*arena, [&] {
+            // Auto: a fresh cost model per run, so that every timed run pays for its calibration.
+            CullideOptions o = options;
+            if (o.exactSwitch.kind == ExactSwitchKind::Auto) o.exactSwitch.exactCost = exactStageCostModel(scene);
             const auto start = Clock::now();
-            CullideResult r = runCullide(scene, backend, options);
+            CullideResult r = runCullide(scene, backend, o);
             timed.emplace_back(secondsSince(start), std::move(r));
         });
     }
@@ -309,11 +352,35 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
                           "mp_depth_rounding", "mp_sampling",     "mp_edge_on",        "mp_untested", "mp_unexplained",
                           "false_positives",   "efficiency",      "attribution_ms"})
         j[k] = nullptr;
+    j["exact_switch"] = c.exactSwitch;
+    j["switched_at_level"] = r.switchedAtLevel >= 0 ? nlohmann::ordered_json(r.switchedAtLevel) : nullptr;
+    j["exact_ms"] = nullptr;
+    j["time_to_exact_ms"] = nullptr;
     if (truth) {
+        // The exact stage on the median run's PCS (the oracle restricted to its triangles), timed
+        // like the runs: the pipeline's time to its exact pairs.
+        std::vector<double> exact;
+        for (int k = 0; k < repeats; ++k)
+            executeIn(*arena, [&] { exact.push_back(oracle::exactStage(scene, r.pcs).totalSeconds); });
+        std::sort(exact.begin(), exact.end());
+        j["exact_ms"] = 1e3 * exact[exact.size() / 2];
+        j["time_to_exact_ms"] = 1e3 * (median + exact[exact.size() / 2]);
         const PcsReport rep = measurePcs(scene, *truth, r.pcs, options);
         const auto start = Clock::now();
         Attribution a;
-        executeIn(*arena, [&] { a = attributeFalsePrunes(scene, *truth, backend, options); });
+        // Auto's switch depends on timings: the instrumented run replays the timed run's decision
+        // (AtLevel: where it stopped, or never), so that it computes the same PCS and its false
+        // prunes stay explained.
+        CullideOptions replay = options;
+        if (options.exactSwitch.kind == ExactSwitchKind::Auto) {
+            replay.exactSwitch = {};
+            if (r.switchedAtLevel >= 0) {
+                replay.exactSwitch.kind = ExactSwitchKind::AtLevel;
+                replay.exactSwitch.level =
+                    options.method == CullMethod::Reliable ? r.passes.back().round + 1 : uint32_t(r.switchedAtLevel);
+            }
+        }
+        executeIn(*arena, [&] { a = attributeFalsePrunes(scene, *truth, backend, replay); });
         j["attribution_ms"] = 1e3 * secondsSince(start);
         // The instrumented run must be the run that was timed (determinism): otherwise every
         // false prune is unexplained.
@@ -406,7 +473,13 @@ const std::vector<std::string>& columns() {
                                                "false_positives",
                                                "efficiency",
                                                "attribution_ms"};
-    return c;
+    // Switch to exact (the exact_switches axis): after the others, so an older CSV's columns stay a prefix.
+    static const std::vector<std::string> all = [] {
+        std::vector<std::string> v = c;
+        for (const char* k : {"exact_switch", "switched_at_level", "exact_ms", "time_to_exact_ms"}) v.push_back(k);
+        return v;
+    }();
+    return all;
 }
 
 bool isTimingColumn(const std::string& name) {

@@ -4,11 +4,11 @@
 // Conventions
 //   - A Spec lists values per axis; the sweep is their product, in a fixed order: scene (and
 //     frame) outermost, then method, resolution, depth, directions, views, hierarchy, leaf size,
-//     backend, threads. RunConfig::index is the position in that order.
+//     exact switch, backend, threads. RunConfig::index is the position in that order.
 //   - A run's id is a 16-hex-digit FNV-1a hash of its canonical key (every axis value, as given,
-//     plus branching and seed; views only when not "fit", so that the ids of studies from before
-//     the axis stay): stable across processes, shards and machines; resuming and merging key on it. Repeats are not
-//     part of the key.
+//     plus branching and seed; views only when not "fit" and the exact switch only when not
+//     "never", so that the ids of studies from before those axes stay): stable across processes,
+//     shards and machines; resuming and merging key on it. Repeats are not part of the key.
 //   - Scenes: "bunny:N" (the deformed bunny, make-scene bunny), "cows:N" (two cows), "cylinders:N"
 //     or "cylinders:N:C", "twist:N" (a twisted bunny); or a scene/mesh file; "@K" picks frame K
 //     of a file's animation, "@all" (the default for files) every frame.
@@ -51,6 +51,7 @@ struct Spec {
     std::vector<std::string> views{"fit"};  // fit | clustered (docs/cullide.md#views-per-cluster)
     std::vector<std::string> hierarchies{"connectivity"};
     std::vector<uint32_t> leafSizes{16};
+    std::vector<std::string> exactSwitches{"never"};  // never | auto | N (parseExactSwitch)
     std::vector<std::string> backends{"cpu"};
     std::vector<int> threads{0};
     uint32_t branching = 4;
@@ -62,7 +63,8 @@ struct Spec {
 };
 
 // Reads a JSON spec: {"scenes": [...], "methods": [...], "resolutions": [...], "depths": [...],
-// "directions": [...], "views": [...], "hierarchies": [...], "leaf_sizes": [...], "backends": [...],
+// "directions": [...], "views": [...], "hierarchies": [...], "leaf_sizes": [...], "exact_switches": [...],
+// "backends": [...],
 // "threads": [...], "branching": B, "seed": S, "repeats": K, "oracle": true}. Scalars are accepted
 // where lists are expected, and a list of one where a scalar is. Every field is checked here,
 // before anything runs: an unknown key, an empty list, a wrong type or a value out of range is an
@@ -81,6 +83,7 @@ struct RunConfig {
     std::string views = "fit";
     uint32_t leafSize = 16, branching = 4;
     uint64_t seed = 1;
+    std::string exactSwitch = "never";
     std::string backend;
     int threads = 0;
 
@@ -107,14 +110,23 @@ size_t studyFrameCount(const std::string& text);
 // Options of a configuration (throws InputError on bad values, naming them by `names`).
 CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names = specOptionNames("study spec"));
 
+// The exact stage's cost model for `--exact-switch auto` (ExactSwitch::exactCost): n times the
+// seconds per triangle of the exact stage (oracle::exactStage) on a calibration sample of `scene`,
+// the 1/16 of its triangles (at least 2048, at most all) whose centroids lie nearest, in the max
+// norm, to the coordinate-wise median centroid: a compact patch, as dense as the PCS's leaves.
+// The sample is timed once, at the model's first call, so that a run that switches pays for it
+// inside its own time (and one that never predicts pays nothing). `scene` must outlive the model.
+std::function<double(size_t)> exactStageCostModel(const Scene& scene);
+
 // One reducePCS call's statistics as a record's (and prune --json's) "passes" entry, under
 // `options`: with clustered views also its count of views, with chosen directions (pca,
 // coherent) also "direction_vector", the direction itself (so that the default entries stay as
 // they were).
 nlohmann::ordered_json passJson(const PassStats& p, const CullideOptions& options);
 
-// Runs one configuration: `repeats` timed runs, then (with the oracle) one instrumented run for
-// the causes. `truth` may be null when the oracle is off (the measures are then null). Returns
+// Runs one configuration: `repeats` timed runs, then (with the oracle) `repeats` timed runs of the
+// exact stage on the PCS (time to exact pairs: the median run plus the median exact stage) and
+// one instrumented run for the causes. `truth` may be null when the oracle is off (the measures are then null). Returns
 // the record; `backend` is the configuration's backend.
 nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const oracle::Truth* truth, int repeats,
                               DepthBackend& backend);
