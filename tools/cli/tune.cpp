@@ -33,7 +33,8 @@ namespace cullide::cli {
 namespace {
 
 // One searched option: its column name, prune's option, the candidates (the default among them).
-// Adding a candidate value is one word in `values`; adding an axis, one entry (with its setter).
+// Adding a candidate value is one word in `values`; adding an axis, one entry (with its setter
+// and getter).
 // The descent visits the axes in this order.
 struct TuneAxis {
     const char* name;
@@ -41,6 +42,7 @@ struct TuneAxis {
     std::vector<std::string> values;
     std::string defaultValue;
     void (*set)(study::Spec&, const std::vector<std::string>&);
+    std::string (*get)(const study::RunConfig&);  // a run's value of this axis
 };
 
 const std::vector<TuneAxis>& tuneAxes() {
@@ -51,27 +53,39 @@ const std::vector<TuneAxis>& tuneAxes() {
          "--exact-switch",
          {"never", "auto"},
          "never",
-         [](study::Spec& s, const std::vector<std::string>& v) { s.exactSwitches = v; }},
+         [](study::Spec& s, const std::vector<std::string>& v) { s.exactSwitches = v; },
+         [](const study::RunConfig& rc) { return std::string(rc.exactSwitch); }},
         {"method",
          "--method",
          {"original", "modified", "reliable"},
          "modified",
-         [](study::Spec& s, const std::vector<std::string>& v) { s.methods = v; }},
+         [](study::Spec& s, const std::vector<std::string>& v) { s.methods = v; },
+         [](const study::RunConfig& rc) { return std::string(rc.method); }},
         {"resolution",
          "--resolution",
          {"250", "500", "1000", "2000", "auto", "auto:4"},
          "500",
-         [](study::Spec& s, const std::vector<std::string>& v) { s.resolutions = v; }},
+         [](study::Spec& s, const std::vector<std::string>& v) { s.resolutions = v; },
+         [](const study::RunConfig& rc) { return std::string(rc.resolution); }},
         {"depth",
          "--depth",
          {"16", "24", "float"},
          "24",
-         [](study::Spec& s, const std::vector<std::string>& v) { s.depths = v; }},
+         [](study::Spec& s, const std::vector<std::string>& v) { s.depths = v; },
+         [](const study::RunConfig& rc) { return std::string(rc.depth); }},
         {"directions",
          "--directions",
-         {"axes", "14"},
+         // coherent is left out: a study runs each frame alone, where it is the axes' full list.
+         {"axes", "14", "pca"},
          "axes",
-         [](study::Spec& s, const std::vector<std::string>& v) { s.directions = v; }},
+         [](study::Spec& s, const std::vector<std::string>& v) { s.directions = v; },
+         [](const study::RunConfig& rc) { return std::string(rc.directions); }},
+        {"views",
+         "--views",
+         {"fit", "clustered"},
+         "fit",
+         [](study::Spec& s, const std::vector<std::string>& v) { s.views = v; },
+         [](const study::RunConfig& rc) { return std::string(rc.views); }},
         {"leaf_size",
          "--leaf-size",
          {"8", "16", "32"},
@@ -79,7 +93,8 @@ const std::vector<TuneAxis>& tuneAxes() {
          [](study::Spec& s, const std::vector<std::string>& v) {
              s.leafSizes.clear();
              for (const std::string& x : v) s.leafSizes.push_back(uint32_t(std::stoul(x)));
-         }},
+         },
+         [](const study::RunConfig& rc) { return std::to_string(rc.leafSize); }},
     };
     return axes;
 }
@@ -181,15 +196,7 @@ public:
 private:
     // Whether run `rc` is the stage's run of `value` on axis `a` (any frame).
     static bool matches(const study::RunConfig& rc, size_t a, const std::string& value) {
-        const std::string name = tuneAxes()[a].name;
-        if (name == "method") return rc.method == value;
-        if (name == "resolution") return rc.resolution == value;
-        if (name == "depth") return rc.depth == value;
-        if (name == "directions") return rc.directions == value;
-        if (name == "leaf_size") return std::to_string(rc.leafSize) == value;
-        if (name == "exact_switch") return rc.exactSwitch == value;
-        CULLIDE_CHECK(false, "tune: an axis without a match rule");
-        return false;
+        return tuneAxes()[a].get(rc) == value;
     }
 
     const TuneOptions& o_;
