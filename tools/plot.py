@@ -93,7 +93,8 @@ METHOD_COLORS = {"original": "tab:blue", "modified": "tab:orange", "reliable": "
 OTHER_COLORS = ["tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan", "tab:red"]
 MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*", "<", ">", "h", "p"]
 # The axes of a configuration, in the sweep's order (cullide/study/study.h), scene and frame apart.
-AXES = ["method", "resolution", "depth", "directions", "hierarchy", "leaf_size", "backend", "threads"]
+AXES = ["method", "resolution", "depth", "directions", "views", "hierarchy", "leaf_size", "exact_switch", "backend",
+        "threads"]
 GENERATORS = {"bunny": "bunny", "cows": "two cows", "twist": "twisted bunny", "cylinders": "cylinders"}
 METHOD = {"name": "modified", "chosen": False}  # the per-call charts' method (--method)
 
@@ -141,6 +142,10 @@ def axis_text(axis, v):
         return v if v == "axes" else f"{v} dirs"
     if axis == "leaf_size":
         return f"leaf {v}"
+    if axis == "views":
+        return f"{v} views"
+    if axis == "exact_switch":
+        return f"exact switch {v}"
     if axis == "threads":
         return "all threads" if v == "0" else f"{v} threads"
     return v
