@@ -166,7 +166,8 @@ def config_text(r, axes):
 
 def common_text(rows, skip=()):
     """What every run shares (the axes that do not vary), for titles."""
-    fixed = [a for a in AXES if a not in varying_axes(rows) and a not in ("backend", "threads", "hierarchy") + skip]
+    fixed = [a for a in AXES if a not in varying_axes(rows) and a not in ("backend", "threads", "hierarchy") + skip
+             and rows[0].get(a) not in (None, "")]  # a study from before the axis has no such column
     return ", ".join(axis_text(a, rows[0].get(a)) for a in fixed)
 
 
