@@ -328,7 +328,7 @@ void addTuneCommand(CLI::App& app, Action& action) {
     auto o = std::make_shared<TuneOptions>();
     CLI::App* sub = app.add_subcommand(
         "tune",
-        "Search method, resolution, depth, directions, leaf size and exact switch for the cheapest configuration "
+        "Search method, resolution, depth, directions, views, leaf size and exact switch for the cheapest configuration "
         "that meets an accuracy target on a scene (docs/cullide.md#tune)");
     sub->add_option("scene", o->scene, "Scene file (FILE@K: frame K) or a study scene (bunny:N, cows:N, ...)")
         ->required();
