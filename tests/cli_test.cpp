@@ -310,6 +310,18 @@ TEST(Cli, ViewsInPruneJsonAndStudy) {
     EXPECT_NE(text.find(",clustered,"), std::string::npos) << text;
 }
 
+// Trap: prune gives a still scene up to the run (emptied once uploaded) when nothing reads it
+// afterwards, but --exact-switch auto's cost model calibrates on that scene during the run: on
+// the emptied scene it would predict an exact stage of 0 ms and always switch. The prediction
+// printed without --exact must be that of a run with it (a real, non-zero cost).
+TEST(Cli, PruneAutoSwitchCalibratesOnTheWholeScene) {
+    const CliRun r = runCli("prune " + quote(kData + "/scenes/two_cows_and_bunny.json") + " --exact-switch auto");
+    ASSERT_EQ(r.status, 0) << r.output;
+    const size_t at = r.output.find("exact stage ");
+    ASSERT_NE(at, std::string::npos) << r.output;
+    EXPECT_GT(std::stod(r.output.substr(at + 12)), 0.0) << r.output;
+}
+
 // prune over every frame keeps each object's hierarchy while its triangles are unchanged, and
 // --rebuild-hierarchy builds them every frame as the paper does. Traps: a reused hierarchy that
 // changes the PCS or a pass; a cache that never reuses (hierarchies_reused stays 0).

@@ -135,7 +135,9 @@ int runPrune(const PruneOptions& o) {
             };
         }
         // Given up to the run (emptied once uploaded) unless something below reads it.
-        const bool sceneNeeded = o.check || o.exact || !o.out.empty() || pictures;
+        // (auto's exact-stage cost model calibrates on it during the run, after the upload.)
+        const bool sceneNeeded = o.check || o.exact || !o.out.empty() || pictures ||
+            options.exactSwitch.kind == ExactSwitchKind::Auto;
         const CullideResult r = sceneNeeded ? runCullide(scene, *backend, frameOptions)
                                             : runCullide(std::move(scene), *backend, frameOptions);
         size_t rendered = 0, queries = 0;
