@@ -777,6 +777,74 @@ TEST(CullideViews, TouchingNodesShareAGroup) {
 }
 
 // Bad option values are refused with a message naming the option, before any work.
+// --- Tiles: a call whose viewport exceeds the backend's largest side ---
+
+namespace {
+
+// The CPU reference as a GPU with small limits would look: it draws at most `side` pixels per
+// side and refuses a larger view, so a run over it passes only if Cullide tiles.
+class SmallViewports final : public DepthBackend {
+public:
+    explicit SmallViewports(int side) : side_(side), cpu_(raster::makeCpuBackend()) {}
+    std::string describe() const override { return "at most " + std::to_string(side_) + " px: " + cpu_->describe(); }
+    void setGeometry(std::span<const Vec3f> p, std::span<const Triangle> t) override { cpu_->setGeometry(p, t); }
+    void setView(const OrthoView& view) override {
+        if (view.width > side_ || view.height > side_) throw std::logic_error("a view beyond the backend's limit");
+        tiled += view.tiled();
+        cpu_->setView(view);
+    }
+    std::vector<uint64_t> execute(const CommandList& list) override { return cpu_->execute(list); }
+    bool supportsConservative() const override { return true; }
+    int maxViewportSide() const override { return side_; }
+    DepthImage readDepth() override { return cpu_->readDepth(); }
+    size_t tiled = 0;  // tiles set
+
+private:
+    int side_;
+    std::unique_ptr<raster::CpuBackend> cpu_;
+};
+
+}  // namespace
+
+// Trap: a backend whose largest viewport is smaller than a call's (a GPU's limits under
+// `--resolution auto`, or a fixed size) must not change the PCS: clamping the viewport (coarser
+// pixels), tiles that sample another grid, results of the tiles not added (or ANY_SAMPLES_PASSED
+// added instead of or-ed), or a list that depends on the state the previous tile left would all
+// change it. Every method, fixed and adaptive resolution, fit and clustered views: the PCS and
+// every call's statistics equal the whole-view run's, and the calls really were tiled.
+TEST(CullideTiles, TiledCallsKeepTheWholeViewsPcs) {
+    const Scene s = sceneOf({{icosphere(2), rotation(0.2, 0.3, 0.1)},
+                             {icosphere(2), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))},
+                             {selfCrossingRibbon(41), rotation(0.31, 0.47, 0.23, Vec3f(0.5f, 0, 0))}});
+    for (CullMethod method : {CullMethod::Original, CullMethod::Modified, CullMethod::Reliable})
+        for (double autoCoverage : {0.0, 4.0})
+            for (ViewMode views : {ViewMode::Fit, ViewMode::Clustered}) {
+                CullideOptions o;
+                o.method = method;
+                o.views = views;
+                o.width = o.height = autoCoverage > 0 ? 48 : 150;
+                o.autoCoverage = autoCoverage;
+                o.hierarchy.leafSize = 8;
+                auto cpu = raster::makeCpuBackend();
+                SmallViewports small(64);
+                const CullideResult want = runCullide(s, *cpu, o), got = runCullide(s, small, o);
+                const std::string what = std::string(toString(method)) + (autoCoverage > 0 ? " auto " : " 150 ") +
+                    toString(views);
+                EXPECT_EQ(got.pcs, want.pcs) << what;
+                EXPECT_GT(small.tiled, 0u) << what << ": nothing was tiled";
+                ASSERT_EQ(got.passes.size(), want.passes.size()) << what;
+                size_t tiledCalls = 0;
+                for (size_t i = 0; i < got.passes.size(); ++i) {
+                    EXPECT_EQ(got.passes[i].nodesOut, want.passes[i].nodesOut) << what << " call " << i;
+                    EXPECT_EQ(got.passes[i].width, want.passes[i].width) << what << " call " << i;
+                    EXPECT_EQ(got.passes[i].views, want.passes[i].views) << what << " call " << i;
+                    EXPECT_EQ(want.passes[i].tiles, want.passes[i].views) << what << " call " << i;
+                    tiledCalls += got.passes[i].tiles > got.passes[i].views;
+                }
+                EXPECT_GT(tiledCalls, 0u) << what << ": no call counts its tiles";
+            }
+}
+
 // Which false prunes break a method's promise (`prune --check` exits 1 on them): reliable keeps every
 // intersecting pair, modified the crossing ones, original those between two objects.
 TEST(Cullide, PromisesToKeepFollowTheMethods) {

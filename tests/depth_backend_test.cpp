@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 namespace cullide {
 namespace {
@@ -86,6 +87,41 @@ TEST(OrthoView, ValidateRejectsBadViews) {
     ok.width = 16384;
     ok.height = 1;
     EXPECT_NO_THROW(ok.validate());
+}
+
+// Trap: a tile's window coordinates computed from a box of its own (rounded differently from the
+// whole view's) or scaled by the tile's size: a tile must be the whole view shifted by an exact
+// integer, for any box, or the tiles of one call sample a different grid. And a tile that does not
+// lie inside its grid, or an origin without a grid, is refused rather than drawn somewhere.
+TEST(OrthoView, TileIsAnExactShiftOfTheWholeView) {
+    OrthoView v = OrthoView::looking(Vec3d(0.3, -0.5, 0.8));
+    v.xmin = -1.37, v.xmax = 2.11, v.ymin = -0.93, v.ymax = 1.29, v.znear = -2, v.zfar = 2.7;
+    v.width = 301, v.height = 177;
+    const OrthoView t = v.tile(128, 64, 128, 113);
+    EXPECT_NO_THROW(t.validate());
+    EXPECT_EQ(t.fullWidth(), 301);
+    EXPECT_EQ(t.fullHeight(), 177);
+    const OrthoView tt = t.tile(5, 7, 10, 10);  // a tile of a tile: origins add, the grid stays
+    EXPECT_EQ(tt.originX, 133);
+    EXPECT_EQ(tt.originY, 71);
+    EXPECT_EQ(tt.fullWidth(), 301);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+    for (int k = 0; k < 1000; ++k) {
+        const Vec3f p(u(rng), u(rng), u(rng));
+        const Vec3d a = v.toWindow(p), b = t.toWindow(p);
+        EXPECT_EQ(b.x(), a.x() - 128);  // exactly, not nearly
+        EXPECT_EQ(b.y(), a.y() - 64);
+        EXPECT_EQ(b.z(), a.z());
+    }
+    EXPECT_THROW(v.tile(200, 0, 128, 10).validate(), InputError);  // beyond the grid's right side
+    EXPECT_THROW(v.tile(-1, 0, 10, 10).validate(), InputError);
+    OrthoView noGrid = v;
+    noGrid.originX = 3;
+    EXPECT_THROW(noGrid.validate(), InputError);
+    OrthoView hugeGrid = v.tile(0, 0, 10, 10);
+    hugeGrid.gridWidth = kMaxViewportSide + 1;
+    EXPECT_THROW(hugeGrid.validate(), InputError);
 }
 
 // Trap: nested queries or an end without a begin slipping through to a backend.

@@ -1102,6 +1102,68 @@ TEST(Differential, ClippedChunksSpillTheirSlots) {
     }
 }
 
+// ---------------------------------------------------------------------------------------------
+// Tiles (OrthoView::tile): Cullide draws a viewport larger than a backend's limit in tiles.
+
+// Trap: a tile whose window coordinates are not exactly the whole view's shifted by its origin
+// (a box recomputed per tile, the scale taken from the tile's size instead of the grid's) samples
+// another grid: fragments, depths, query or conflict counts differ at the tile's pixels. (The
+// conservative depth error bound is taken over the grid's pixels too, conservative.cpp; it moves
+// an interval by ~1e-14 of a stored step, and no case here is sensitive to it.) A view whose
+// pixels have no dyadic size (so toWindow rounds), tiles that do not divide it, each on a fresh
+// backend: its depth image is the whole view's sub-rectangle, and its counts add up
+// (ANY_SAMPLES_PASSED: their maximum) to the whole view's, for the depth-test and the conservative
+// commands. Vertices beyond the guard band are left out: it lies at a fixed distance from the
+// tile's own origin, the one rule not invariant under the shift (no fitted view reaches it).
+TEST(Tiles, TilesHoldTheWholeViewsFragments) {
+    for (uint64_t seed = 201; seed <= 204; ++seed) {
+        const int W = 150, H = 110;
+        RandomScene s = randomScene(seed, W, H, 400, 150);
+        for (Vec3f& p : s.geo.positions) p.x() = std::clamp(p.x(), -1000.0f, 1000.0f);
+        OrthoView view = windowView(W, H, seed % 2 ? DepthFormat::unorm(24) : DepthFormat::float32());
+        view.xmin = -0.37, view.xmax = 151.3, view.ymin = 0.71, view.ymax = 109.9;
+        CommandList conservative;
+        conservative.clearIntervals();
+        for (uint32_t i = 0; i < uint32_t(s.geo.triangles.size()); ++i) {
+            conservative.beginQuery();
+            conservative.drawConservative(i, 1, true, true);
+            conservative.endQuery();
+        }
+        std::vector<uint8_t> any;
+        for (const Command& c : s.list.commands())
+            if (c.op == Command::Op::BeginQuery) any.push_back(c.queryKind == QueryKind::AnySamplesPassed);
+
+        CpuBackendOptions o;
+        o.threads = 2;
+        auto whole = backendFor(s.geo, view, o);
+        const std::vector<uint64_t> want = whole->execute(s.list);
+        const DepthImage wantDepth = whole->readDepth();
+        const std::vector<uint64_t> wantConflicts = whole->execute(conservative);
+        std::vector<uint64_t> got(want.size(), 0), gotConflicts(wantConflicts.size(), 0);
+        size_t depthDiffers = 0;
+        const int side = seed % 2 ? 64 : 37;
+        for (int y = 0; y < H; y += side)
+            for (int x = 0; x < W; x += side) {
+                const OrthoView tile = view.tile(x, y, std::min(side, W - x), std::min(side, H - y));
+                auto b = backendFor(s.geo, tile, o);
+                const std::vector<uint64_t> r = b->execute(s.list);
+                ASSERT_EQ(r.size(), got.size());
+                for (size_t q = 0; q < r.size(); ++q) got[q] = any[q] ? std::max(got[q], r[q]) : got[q] + r[q];
+                const DepthImage d = b->readDepth();
+                for (int j = 0; j < tile.height; ++j)
+                    for (int i = 0; i < tile.width; ++i) depthDiffers += d.at(i, j) != wantDepth.at(x + i, y + j);
+                const std::vector<uint64_t> c = b->execute(conservative);
+                for (size_t q = 0; q < c.size(); ++q) gotConflicts[q] += c[q];
+            }
+        EXPECT_EQ(got, want) << "seed " << seed;
+        EXPECT_EQ(depthDiffers, 0u) << "seed " << seed;
+        EXPECT_EQ(gotConflicts, wantConflicts) << "seed " << seed;
+        uint64_t fragments = 0;
+        for (uint64_t c : wantConflicts) fragments += c;
+        EXPECT_GT(fragments, 0u) << "sanity: the conservative draws conflict somewhere";
+    }
+}
+
 // Trap: releaseScratch() (trace recording frees the records between frames) leaving the backend
 // without per-tile state or with stale records: lists after it, with and without a new view,
 // must give what a backend that never released gives, for the plain and the conservative path.

@@ -213,7 +213,48 @@ TEST(Trace, EveryCommandRoundTrips) {
     EXPECT_EQ(back.queries[1].interval.possible, 19u);
     EXPECT_EQ(back.view.width, 7);
     EXPECT_EQ(back.view.depth, DepthFormat::float32());
+    EXPECT_FALSE(back.view.tiled());
+    EXPECT_FALSE(r.header()["frames"][1]["lists"][0]["view"].contains("tile")) << "a whole view reads as before";
     EXPECT_EQ(raster::queryDraws(back.commands, 1), (std::vector<std::pair<uint32_t, uint32_t>>{{0, 2}}));
+}
+
+// Trap: a tile's origin and grid (OrthoView::tile) lost in the trace: a replay would draw the
+// whole view's corner instead of the tile. Written, read back the same; a tile outside its grid or
+// a malformed tile is refused naming the view.
+TEST(Trace, TileViewsRoundTrip) {
+    TempDir dir;
+    const std::vector<Vec3f> p = {{0, 0, 0.1f}, {1, 0, 0.2f}, {0, 1, 0.3f}};
+    const std::vector<Triangle> t = {{0, 1, 2}};
+    CommandList list;
+    list.clear(1.0);
+    list.draw(0, 1);
+    OrthoView whole;
+    whole.xmin = 0, whole.xmax = 1, whole.ymin = 0, whole.ymax = 1, whole.znear = 0, whole.zfar = 1;
+    whole.width = 300, whole.height = 200;
+    {
+        raster::TraceWriter w(dir / "t.trace", {}, {}, {});
+        w.beginFrame(0, p, t);
+        w.addList(whole.tile(128, 128, 128, 72), list, {});
+        w.finish();
+    }
+    const raster::TraceList back = raster::TraceReader(dir / "t.trace").readList(0);
+    EXPECT_EQ(back.view.originX, 128);
+    EXPECT_EQ(back.view.originY, 128);
+    EXPECT_EQ(back.view.fullWidth(), 300);
+    EXPECT_EQ(back.view.fullHeight(), 200);
+    EXPECT_EQ(back.view.width, 128);
+    EXPECT_EQ(back.view.height, 72);
+
+    const std::string bytes = slurp(dir / "t.trace");
+    const Parts good = split(bytes);
+    auto edited = [&](const std::function<void(Json&)>& edit) {
+        Parts q = good;
+        edit(q.header["frames"][0]["lists"][0]["view"]["tile"]);
+        return readError(dir, join(q));
+    };
+    EXPECT_NE(edited([](Json& tile) { tile["origin"][0] = 250; }).find("does not lie inside its"), std::string::npos);
+    EXPECT_NE(edited([](Json& tile) { tile["grid"] = "big"; }).find("tile.grid"), std::string::npos);
+    EXPECT_NE(edited([](Json& tile) { tile.erase("origin"); }).find("origin"), std::string::npos);
 }
 
 // Trap: a trace recorded from the reliable method, whose conservative commands no GPU has.

@@ -273,6 +273,53 @@ INSTANTIATE_TEST_SUITE_P(VulkanBackend, VulkanFormats,
                          ::testing::Values(DepthFormat::unorm(16), DepthFormat::unorm(24), DepthFormat::float32()),
                          formatName);
 
+// Trap: a tile (OrthoView::tile, how Cullide draws a call larger than the backend's limit) whose
+// shader ignores the origin or scales by the tile's size instead of the grid's: each tile would
+// draw the whole view's corner, or another grid. The 300 random triangles of the test above, each
+// a query, drawn in 24-pixel tiles of the 64x64 view (the last tiles 16 wide): per triangle, the
+// tiles' counts add up to the reference's count over the whole view.
+TEST(VulkanBackend, TilesAddUpToTheWholeViewsCoverage) {
+    VULKAN_OR_SKIP();
+    std::mt19937 rng(20030707);
+    std::uniform_real_distribution<float> xy(-4.0f, 68.0f), z(0.0f, 1.0f), small(-3.0f, 3.0f);
+    std::vector<Vec3f> p;
+    std::vector<Triangle> t;
+    for (uint32_t i = 0; i < 300; ++i) {
+        const Vec3f a(xy(rng), xy(rng), z(rng));
+        const bool tiny = i % 3 == 0;
+        const Vec3f b = tiny ? a + Vec3f(small(rng), small(rng), 0) : Vec3f(xy(rng), xy(rng), z(rng));
+        const Vec3f c = tiny ? a + Vec3f(small(rng), small(rng), 0) : Vec3f(xy(rng), xy(rng), z(rng));
+        p.insert(p.end(), {a, b, c});
+        t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
+    }
+    const OrthoView view = test::windowView(64, 64);
+    CommandList list;
+    list.depthFunc(DepthFunc::Always);
+    list.depthMask(false);
+    for (uint32_t i = 0; i < t.size(); ++i) {
+        list.beginQuery();
+        list.draw(i, 1);
+        list.endQuery();
+    }
+    std::unique_ptr<raster::CpuBackend> cpu = raster::makeCpuBackend();
+    cpu->setGeometry(p, t);
+    cpu->setView(view);
+    const std::vector<uint64_t> want = cpu->execute(list);
+    auto gpu = makeValidated();
+    gpu->setGeometry(p, t);
+    std::vector<uint64_t> got(t.size(), 0);
+    for (int y = 0; y < 64; y += 24)
+        for (int x = 0; x < 64; x += 24) {
+            gpu->setView(view.tile(x, y, std::min(24, 64 - x), std::min(24, 64 - y)));
+            const std::vector<uint64_t> r = gpu->execute(list);
+            ASSERT_EQ(r.size(), got.size());
+            for (size_t i = 0; i < r.size(); ++i) got[i] += r[i];
+        }
+    EXPECT_EQ(got, want);
+    EXPECT_NO_VALIDATION_MESSAGES(*gpu);
+}
+
+
 // Trap: a backend that reports nothing useful about what it got (device, driver, format actually
 // used), or a format other than the one asked for without saying so.
 TEST(VulkanBackend, DescribeNamesDeviceDriverAndFormat) {

@@ -777,7 +777,7 @@ private:
         const auto start = Clock::now();
         // A unit alone in its view has no unit to be tested against: it stays for its exact pairs only.
         std::vector<Item> kept = byViews(
-            pcs, d, [&](const std::vector<Item>& units) { return testUnits(units, d); },
+            pcs, [&](const std::vector<Item>& units) { return testUnits(units); },
             [&](const std::vector<Item>& units) {
                 return units.size() == 1 ? std::vector<uint8_t>{exactHit_[units[0].object][units[0].node]}
                                          : std::vector<uint8_t>{};
@@ -786,7 +786,7 @@ private:
     }
 
     // One reliable view: which of `pcs` stay (a conflict or an exact pair).
-    std::vector<uint8_t> testUnits(const std::vector<Item>& pcs, uint32_t d) {
+    std::vector<uint8_t> testUnits(const std::vector<Item>& pcs) {
         ranges_.clear();
         for (const Item& it : pcs) ranges_.push_back(it.range);
         setView();
@@ -835,7 +835,7 @@ private:
                 list_.drawConservative(pcs[y].range.first, pcs[y].range.count, false, true);
             }
         }
-        const std::vector<uint64_t> results = backend_.execute(list_);
+        const std::vector<uint64_t> results = execute();
         std::vector<uint8_t> conflict(n, 0);
         for (const auto& [u, q] : queries) conflict[u] |= results[q] > 0 ? 1 : 0;
 
@@ -846,17 +846,45 @@ private:
     }
 
     // The view of a call in direction dir_ on ranges_: fitted at the fixed viewport, or at the one
-    // adaptive resolution chooses for these triangles.
+    // adaptive resolution chooses for these triangles. A viewport larger than the backend draws is
+    // cut into tiles_ of its largest side (row by row from the bottom-left), which execute() runs
+    // one after the other; else tiles_ is empty and the backend gets the whole view here.
     void setView() {
         int w = opt_.width, h = opt_.height;
         if (opt_.autoCoverage > 0)
             std::tie(w, h) = adaptiveViewport(positions_, triangles_, ranges_, dir_, opt_.autoCoverage, opt_.width,
-                                              opt_.height, opt_.autoBudget, backend_.maxViewportSide());
+                                              opt_.height, opt_.autoBudget, kMaxViewportSide);
         view_ = fitView(positions_, triangles_, ranges_, dir_, w, h, opt_.depth);
-        backend_.setView(view_);
+        tiles_.clear();
+        const int side = std::clamp(backend_.maxViewportSide(), 1, kMaxViewportSide);
+        if (w <= side && h <= side) {
+            backend_.setView(view_);
+            return;
+        }
+        for (int y = 0; y < h; y += side)
+            for (int x = 0; x < w; x += side) tiles_.push_back(view_.tile(x, y, std::min(side, w - x), std::min(side, h - y)));
     }
 
-    // The nodes of `pcs` that stay after a call in direction d, in `pcs` order. With one view
+    // Runs list_ under the current view: once, or once per tile. A tile holds exactly the
+    // fragments the whole view has at its pixels (OrthoView::tile), and every list of a call starts
+    // from a clear with the depth mask set (each list leaves it set), so a query's result over the
+    // whole view is the sum of its tiles' (SAMPLES_PASSED) or their maximum (ANY_SAMPLES_PASSED).
+    std::vector<uint64_t> execute() {
+        if (tiles_.empty()) return backend_.execute(list_);
+        std::vector<uint8_t> any;  // per query: ANY_SAMPLES_PASSED
+        for (const Command& c : list_.commands())
+            if (c.op == Command::Op::BeginQuery) any.push_back(c.queryKind == QueryKind::AnySamplesPassed);
+        std::vector<uint64_t> total(any.size(), 0);
+        for (const OrthoView& tile : tiles_) {
+            backend_.setView(tile);
+            const std::vector<uint64_t> r = backend_.execute(list_);
+            CULLIDE_CHECK(r.size() == total.size(), "a backend returned the wrong number of query results");
+            for (size_t q = 0; q < r.size(); ++q) total[q] = any[q] ? std::max(total[q], r[q]) : total[q] + r[q];
+        }
+        return total;
+    }
+
+    // The nodes of `pcs` that stay after a call in direction dir_, in `pcs` order. With one view
     // (ViewMode::Fit, or a single group) `test(pcs)` draws them all, as the paper does. Otherwise
     // each group of viewGroups is drawn on its own by `test(group)`, with its own fitted view and
     // command list, unless `undrawn(group)` already says which of its nodes stay (non-empty).
@@ -865,7 +893,7 @@ private:
     // method promises is about such pairs, and each group's call is a call of the method on a PCS
     // of its own (any view will do: docs/cullide.md#views-per-cluster).
     template <typename Test, typename Undrawn>
-    std::vector<Item> byViews(const std::vector<Item>& pcs, uint32_t d, Test&& test, Undrawn&& undrawn) {
+    std::vector<Item> byViews(const std::vector<Item>& pcs, Test&& test, Undrawn&& undrawn) {
         views_ = {};
         std::vector<std::vector<uint32_t>> groups;
         if (opt_.views == ViewMode::Clustered && pcs.size() > 1) {
@@ -898,6 +926,7 @@ private:
         for (const Command& c : list_.commands())
             if (c.op == drawOp) views_.rendered += c.count;
         views_.queries += list_.queryCount();
+        views_.tiles += std::max<uint32_t>(1, uint32_t(tiles_.size()));
         if (views_.count == 0 || int64_t(view_.width) * view_.height > int64_t(views_.width) * views_.height)
             views_.width = view_.width, views_.height = view_.height;
         ++views_.count;
@@ -910,7 +939,7 @@ private:
         // object's nodes every node is fully visible, pruned without drawing. The modified method
         // tests a node against itself too, so even a lone node is drawn.
         std::vector<Item> kept = byViews(
-            pcs, d, [&](const std::vector<Item>& nodes) { return testNodes(nodes, d); },
+            pcs, [&](const std::vector<Item>& nodes) { return testNodes(nodes); },
             [&](const std::vector<Item>& nodes) {
                 const bool oneObject = std::all_of(nodes.begin(), nodes.end(),
                                                    [&](const Item& it) { return it.object == nodes[0].object; });
@@ -921,7 +950,7 @@ private:
     }
 
     // One view of a modified or original call: which of `pcs` stay (not fully visible).
-    std::vector<uint8_t> testNodes(const std::vector<Item>& pcs, uint32_t d) {
+    std::vector<uint8_t> testNodes(const std::vector<Item>& pcs) {
         ranges_.clear();
         for (const Item& it : pcs) ranges_.push_back(it.range);
         setView();
@@ -959,7 +988,7 @@ private:
             for (size_t g = groups.size(); g-- > 0;) group(groups[g], reverseQuery);
         }
 
-        const std::vector<uint64_t> results = backend_.execute(list_);
+        const std::vector<uint64_t> results = execute();
         std::vector<uint8_t> stays(pcs.size());
         for (size_t i = 0; i < pcs.size(); ++i) {
             const bool fullyVisible = results[forwardQuery[i]] == 0 && results[reverseQuery[i]] == 0;
@@ -992,6 +1021,7 @@ private:
         // No view drawn (every group was decided undrawn): the base viewport.
         st.width = views_.count ? views_.width : opt_.width, st.height = views_.count ? views_.height : opt_.height;
         st.views = views_.count;
+        st.tiles = views_.tiles;
         st.round = round_;
         st.seconds = secondsSince(start);
         passes.push_back(st);
@@ -1017,8 +1047,9 @@ private:
     struct ViewTotals {
         size_t rendered = 0, queries = 0;
         int width = 0, height = 0;
-        uint32_t count = 0;
+        uint32_t count = 0, tiles = 0;
     } views_;
+    std::vector<OrthoView> tiles_;  // the current view's tiles (empty: drawn whole)
     Vec3d dir_ = Vec3d::Zero();  // the current call's direction
     uint32_t step_ = 0;  // the current level (reliable: round), for the coherent history
     std::vector<std::vector<size_t>> stepPruned_;  // coherent: [step][direction] triangles pruned

@@ -82,8 +82,16 @@ bool finite3(const Vec3d& v) {
 Vec3d OrthoView::toWindow(const Vec3f& p) const {
     const double px = p.x(), py = p.y(), pz = p.z();
     const double x = dot3(right, px, py, pz), y = dot3(up, px, py, pz), z = dot3(dir, px, py, pz);
-    return {(x - xmin) / (xmax - xmin) * double(width), (y - ymin) / (ymax - ymin) * double(height),
-            (z - znear) / (zfar - znear)};
+    return {(x - xmin) / (xmax - xmin) * double(fullWidth()) - double(originX),
+            (y - ymin) / (ymax - ymin) * double(fullHeight()) - double(originY), (z - znear) / (zfar - znear)};
+}
+
+OrthoView OrthoView::tile(int x, int y, int w, int h) const {
+    OrthoView t = *this;
+    t.gridWidth = fullWidth(), t.gridHeight = fullHeight();
+    t.originX = originX + x, t.originY = originY + y;
+    t.width = w, t.height = h;
+    return t;
 }
 
 OrthoView OrthoView::looking(const Vec3d& direction) {
@@ -119,6 +127,19 @@ void OrthoView::validate() const {
         throw InputError("view",
                          "the viewport must be 1.." + std::to_string(kMaxViewportSide) + " pixels per side, got " +
                              std::to_string(width) + "x" + std::to_string(height));
+    if (tiled()) {
+        if (gridWidth < 1 || gridWidth > kMaxViewportSide || gridHeight < 1 || gridHeight > kMaxViewportSide)
+            throw InputError("view", "a tile's grid must be 1.." + std::to_string(kMaxViewportSide) +
+                                         " pixels per side, got " + std::to_string(gridWidth) + "x" +
+                                         std::to_string(gridHeight));
+        if (originX < 0 || originY < 0 || originX > gridWidth - width || originY > gridHeight - height)
+            throw InputError("view", "the tile " + std::to_string(width) + "x" + std::to_string(height) + " at (" +
+                                         std::to_string(originX) + ", " + std::to_string(originY) +
+                                         ") does not lie inside its " + std::to_string(gridWidth) + "x" +
+                                         std::to_string(gridHeight) + " grid");
+    } else if (originX != 0 || originY != 0) {
+        throw InputError("view", "a view with an origin needs its grid (gridWidth, gridHeight)");
+    }
     if (depth.kind == DepthFormat::Kind::Unorm && (depth.bits < 8 || depth.bits > 32))
         throw InputError("view", "unorm depth needs 8 to 32 bits, got " + std::to_string(depth.bits));
     if (depth.kind == DepthFormat::Kind::Float32 && depth.bits != 32)

@@ -478,7 +478,7 @@ PYBIND11_MODULE(_cullide, m) {
             "passes",
             [](const PyResult& r) {
                 const size_t n = r.result.passes.size();
-                py::array_t<uint32_t> level(n), direction(n), round(n), views(n);
+                py::array_t<uint32_t> level(n), direction(n), round(n), views(n), tiles(n);
                 py::array_t<int32_t> width(n), height(n);
                 py::array_t<uint64_t> nodesIn(n), nodesOut(n), triIn(n), triOut(n), rendered(n), queries(n);
                 py::array_t<double> seconds(n);
@@ -490,7 +490,7 @@ PYBIND11_MODULE(_cullide, m) {
                     triIn.mutable_at(i) = p.trianglesIn, triOut.mutable_at(i) = p.trianglesOut;
                     rendered.mutable_at(i) = p.trianglesRendered, queries.mutable_at(i) = p.queries;
                     width.mutable_at(i) = p.width, height.mutable_at(i) = p.height, round.mutable_at(i) = p.round;
-                    seconds.mutable_at(i) = p.seconds, views.mutable_at(i) = p.views;
+                    seconds.mutable_at(i) = p.seconds, views.mutable_at(i) = p.views, tiles.mutable_at(i) = p.tiles;
                     for (int k = 0; k < 3; ++k) vector.mutable_at(i, size_t(k)) = p.dirVector[k];
                 }
                 py::dict d;
@@ -498,6 +498,7 @@ PYBIND11_MODULE(_cullide, m) {
                 d["triangles_in"] = triIn, d["triangles_out"] = triOut, d["triangles_rendered"] = rendered;
                 d["queries"] = queries, d["width"] = width, d["height"] = height, d["round"] = round;
                 d["seconds"] = seconds, d["views"] = views;  // views: clustered's groups drawn (else 1)
+                d["tiles"] = tiles;  // executions: views, each once per tile (a backend's viewport limit)
                 d["direction_vector"] = vector;
                 return d;
             },

@@ -28,7 +28,8 @@ layout(location = 0) in vec3 position;
 uniform dvec3 uRight, uUp, uDir;
 uniform dvec3 uMin;     // xmin, ymin, znear
 uniform dvec3 uExtent;  // xmax - xmin, ymax - ymin, zfar - znear
-uniform dvec2 uSize;    // width, height
+uniform dvec2 uSize;    // the grid: width, height (of the whole view when this is a tile)
+uniform dvec2 uOrigin;  // the tile's origin in the grid (0, 0 for a whole view)
 uniform vec2 uScale;    // window -> clip: 1/P (exact) or 2/W, 2/H
 uniform vec2 uOffset;   // 0 (exact) or -1
 void main() {
@@ -36,8 +37,8 @@ void main() {
     precise double x = uRight.x * px + uRight.y * py + uRight.z * pz;
     precise double y = uUp.x * px + uUp.y * py + uUp.z * pz;
     precise double z = uDir.x * px + uDir.y * py + uDir.z * pz;
-    precise double xw = (x - uMin.x) / uExtent.x * uSize.x;
-    precise double yw = (y - uMin.y) / uExtent.y * uSize.y;
+    precise double xw = (x - uMin.x) / uExtent.x * uSize.x - uOrigin.x;
+    precise double yw = (y - uMin.y) / uExtent.y * uSize.y - uOrigin.y;
     precise double zw = (z - uMin.z) / uExtent.z;
     precise float cx = float(xw) * uScale.x + uOffset.x;
     precise float cy = float(yw) * uScale.y + uOffset.y;
@@ -132,7 +133,7 @@ public:
         GLint ok = 0;
         glGetProgramiv(program_, GL_LINK_STATUS, &ok);
         if (!ok) throw BackendUnavailable("the GL cannot link the shader program");
-        for (const char* name : {"uRight", "uUp", "uDir", "uMin", "uExtent", "uSize", "uScale", "uOffset"})
+        for (const char* name : {"uRight", "uUp", "uDir", "uMin", "uExtent", "uSize", "uScale", "uOffset", "uOrigin"})
             uniforms_.push_back(glGetUniformLocation(program_, name));
 
         glCreateVertexArrays(1, &vao_);
@@ -246,9 +247,12 @@ public:
         // P >= twice the larger side where the GL allows it, so that GL's clipping against the
         // viewport (at window -P and P) stays at least one viewport away from the framebuffer.
         auto fits = [&](int q) { return 2 * q <= info_.maxViewport && -q >= viewportBoundsMin_; };
+        // For a tile (OrthoView::tile) the geometry spans its whole grid, up to a grid's side away
+        // from the framebuffer: P grows towards twice the grid's side, so that GL clips none of it.
         int P = 1;
         while (P < std::max(width_, height_)) P *= 2;
-        if (fits(2 * P)) P *= 2;
+        const int64_t reach = 2 * int64_t(std::max(view.fullWidth(), view.fullHeight()));
+        while (P < reach && fits(2 * P)) P *= 2;
         const bool exact = fits(P);
         if (exact) {
             glViewport(-P, -P, 2 * P, 2 * P);
@@ -266,7 +270,8 @@ public:
         glProgramUniform3d(program_, uniforms_[3], view.xmin, view.ymin, view.znear);
         glProgramUniform3d(program_, uniforms_[4], view.xmax - view.xmin, view.ymax - view.ymin,
                            view.zfar - view.znear);
-        glProgramUniform2d(program_, uniforms_[5], double(view.width), double(view.height));
+        glProgramUniform2d(program_, uniforms_[5], double(view.fullWidth()), double(view.fullHeight()));
+        glProgramUniform2d(program_, uniforms_[8], double(view.originX), double(view.originY));
         haveView_ = true;
         checkError("setView");
     }

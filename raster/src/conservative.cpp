@@ -42,8 +42,11 @@ WindowError windowError(const OrthoView& view, std::span<const Vec3f> positions)
     for (const Vec3f& p : positions)
         m = std::max(m, double(std::abs(p.x())) + double(std::abs(p.y())) + double(std::abs(p.z())));
     WindowError e;
-    const double ax = (2 * m + std::abs(view.xmin) + std::abs(view.xmax)) / (view.xmax - view.xmin) * view.width;
-    const double ay = (2 * m + std::abs(view.ymin) + std::abs(view.ymax)) / (view.ymax - view.ymin) * view.height;
+    // A tile's window coordinates are the whole view's minus an integer (exact): the grid's error.
+    const double ax =
+        (2 * m + std::abs(view.xmin) + std::abs(view.xmax)) / (view.xmax - view.xmin) * view.fullWidth();
+    const double ay =
+        (2 * m + std::abs(view.ymin) + std::abs(view.ymax)) / (view.ymax - view.ymin) * view.fullHeight();
     e.xy = 8 * kU * std::max(ax, ay);
     e.z = 8 * kU * ((2 * m + std::abs(view.znear) + std::abs(view.zfar)) / (view.zfar - view.znear) + 1);
     return e;
@@ -118,6 +121,10 @@ bool setupConservative(const WinVertex& v0, const WinVertex& v1, const WinVertex
         by0 = -floorDiv(-(ly - D - one), one);
         by1 = floorDiv(hy + D, one);
     }
+    // The pixel range clipped to the grid (the whole view), over which the depth error is
+    // bounded: the same for a tile as for the whole view, so both get the same intervals.
+    const int64_t gx0 = std::max<int64_t>(bx0, params.gridX0), gx1 = std::min<int64_t>(bx1, params.gridX1);
+    const int64_t gy0 = std::max<int64_t>(by0, params.gridY0), gy1 = std::min<int64_t>(by1, params.gridY1);
     bx0 = std::max<int64_t>(bx0, 0);
     by0 = std::max<int64_t>(by0, 0);
     bx1 = std::min<int64_t>(bx1, params.width - 1);
@@ -147,8 +154,8 @@ bool setupConservative(const WinVertex& v0, const WinVertex& v1, const WinVertex
                 out.plane = DepthPlane{v0.x, v0.y, v0.z, gx, gy};
                 const double dpx = 0.5 + double(out.dilation) / double(one);
                 out.spread = (std::abs(gx) + std::abs(gy) + gerrX + gerrY) * dpx;
-                const double mdx = std::max(std::abs(out.x0 + 0.5 - v0.x), std::abs(out.x1 + 0.5 - v0.x)) + 1;
-                const double mdy = std::max(std::abs(out.y0 + 0.5 - v0.y), std::abs(out.y1 + 0.5 - v0.y)) + 1;
+                const double mdx = std::max(std::abs(double(gx0) + 0.5 - v0.x), std::abs(double(gx1) + 0.5 - v0.x)) + 1;
+                const double mdy = std::max(std::abs(double(gy0) + 0.5 - v0.y), std::abs(double(gy1) + 0.5 - v0.y)) + 1;
                 out.eps = gerrX * mdx + gerrY * mdy +
                     16 * kU * (std::abs(v0.z) + std::abs(gx) * mdx + std::abs(gy) * mdy + out.spread);
             }

@@ -152,6 +152,8 @@ public:
         params_.fillRule = options_.fillRule;
         params_.width = view.width;
         params_.height = view.height;
+        params_.gridX0 = -view.originX, params_.gridX1 = view.fullWidth() - view.originX - 1;
+        params_.gridY0 = -view.originY, params_.gridY1 = view.fullHeight() - view.originY - 1;
         if (resize) {
             // A new size starts cleared to 1.0, but lazily (depthPending_): a list that begins with
             // a clear, as every reducePCS does, need not pay for the fill, which with a viewport

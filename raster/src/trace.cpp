@@ -35,7 +35,8 @@ Json rulesJson(const TraceRules& r) {
     return {
         {"window_transform",
          "x = right.p, y = up.p, z = dir.p in double from float32 p; xw = (x - xmin) / (xmax - xmin) * width, "
-         "yw = (y - ymin) / (ymax - ymin) * height, zw = (z - znear) / (zfar - znear); origin bottom-left, y up"},
+         "yw = (y - ymin) / (ymax - ymin) * height, zw = (z - znear) / (zfar - znear); origin bottom-left, y up; "
+         "for a view with a tile, width and height are the tile's grid and the tile's origin is subtracted"},
         {"pixel_centers", "(i + 0.5, j + 0.5), one sample per pixel"},
         {"subpixel_bits", r.subpixelBits},
         {"fill_rule", toString(r.fillRule)},
@@ -54,12 +55,17 @@ Json vec3Json(const Vec3d& v) {
 }
 
 Json viewJson(const OrthoView& v) {
-    return {{"right", vec3Json(v.right)},
-            {"up", vec3Json(v.up)},
-            {"dir", vec3Json(v.dir)},
-            {"box", Json::array({v.xmin, v.xmax, v.ymin, v.ymax, v.znear, v.zfar})},
-            {"viewport", Json::array({v.width, v.height})},
-            {"depth", v.depth.name()}};
+    Json j = {{"right", vec3Json(v.right)},
+              {"up", vec3Json(v.up)},
+              {"dir", vec3Json(v.dir)},
+              {"box", Json::array({v.xmin, v.xmax, v.ymin, v.ymax, v.znear, v.zfar})},
+              {"viewport", Json::array({v.width, v.height})},
+              {"depth", v.depth.name()}};
+    // A tile of a larger view (OrthoView::tile): only then, so whole views read as before.
+    if (v.tiled())
+        j["tile"] = {{"origin", Json::array({v.originX, v.originY})},
+                     {"grid", Json::array({v.fullWidth(), v.fullHeight()})}};
+    return j;
 }
 
 // The reliable method's commands: refused by the writer and the recorder alike.
@@ -321,6 +327,19 @@ OrthoView parseView(const Json& j, const std::string& where) {
                                     std::to_string(kMaxViewportSide));
     v.width = int(vp[0].get<uint64_t>());
     v.height = int(vp[1].get<uint64_t>());
+    if (j.contains("tile")) {
+        const Json& tile = j["tile"];
+        auto pair = [&](const char* key) {
+            const Json& p = field(tile, key, where + ".tile");
+            if (!p.is_array() || p.size() != 2 || !p[0].is_number_unsigned() || !p[1].is_number_unsigned() ||
+                p[0].get<uint64_t>() > uint64_t(kMaxViewportSide) || p[1].get<uint64_t>() > uint64_t(kMaxViewportSide))
+                throw std::invalid_argument(where + ".tile." + key + " is not a pair of integers 0.." +
+                                            std::to_string(kMaxViewportSide));
+            return std::pair{int(p[0].get<uint64_t>()), int(p[1].get<uint64_t>())};
+        };
+        std::tie(v.originX, v.originY) = pair("origin");
+        std::tie(v.gridWidth, v.gridHeight) = pair("grid");
+    }
     const Json& depth = field(j, "depth", where);
     if (!depth.is_string()) throw std::invalid_argument(where + ".depth is not a string");
     try {

@@ -5,6 +5,7 @@
 #include "cullide/raster/rules.h"
 
 #include <cstdint>
+#include <limits>
 
 namespace cullide::raster::detail {
 
@@ -35,6 +36,12 @@ enum TriFlags : uint8_t {
 struct SetupParams {
     int subpixelBits = kDefaultSubpixelBits;
     int width = 1, height = 1;
+    // The whole grid when the view is a tile (OrthoView::tile), in the tile's pixels: columns
+    // [gridX0, gridX1] and rows [gridY0, gridY1]. Conservative setup bounds its depth error over
+    // the triangle's pixels clipped to the grid, not to the tile, so that a tile's intervals are
+    // those of the whole view. The defaults (no grid) bound it over the unclipped range: sound.
+    int gridX0 = std::numeric_limits<int>::min(), gridY0 = std::numeric_limits<int>::min();
+    int gridX1 = std::numeric_limits<int>::max(), gridY1 = std::numeric_limits<int>::max();
     FillRule fillRule = FillRule::BottomLeft;
     // Drop sub-triangles whose bounding box holds no pixel centre of the viewport (they cannot
     // produce a fragment). The fast path sets it; the scalar reference path does not, so that it

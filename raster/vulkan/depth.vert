@@ -11,7 +11,7 @@ layout(set = 0, binding = 0, std140) uniform View {
     dvec4 right, up, dir;
     dvec4 lo;      // xmin, ymin, znear
     dvec4 extent;  // xmax - xmin, ymax - ymin, zfar - znear
-    dvec4 size;    // width, height
+    dvec4 size;    // x, y: the grid (the whole view's width, height); z, w: the tile's origin in it
     vec4 scaleOffset;  // window -> clip: (1/P, 1/P, 0, 0) (exact) or (2/W, 2/H, -1, -1)
 } v;
 
@@ -20,8 +20,8 @@ void main() {
     precise double x = v.right.x * px + v.right.y * py + v.right.z * pz;
     precise double y = v.up.x * px + v.up.y * py + v.up.z * pz;
     precise double z = v.dir.x * px + v.dir.y * py + v.dir.z * pz;
-    precise double xw = (x - v.lo.x) / v.extent.x * v.size.x;
-    precise double yw = (y - v.lo.y) / v.extent.y * v.size.y;
+    precise double xw = (x - v.lo.x) / v.extent.x * v.size.x - v.size.z;
+    precise double yw = (y - v.lo.y) / v.extent.y * v.size.y - v.size.w;
     precise double zw = (z - v.lo.z) / v.extent.z;
     precise float cx = float(xw) * v.scaleOffset.x + v.scaleOffset.z;
     precise float cy = float(yw) * v.scaleOffset.y + v.scaleOffset.w;

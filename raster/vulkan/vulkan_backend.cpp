@@ -151,9 +151,12 @@ public:
         // least twice the larger side where the device allows, so that clipping at +-P stays a
         // viewport away from the framebuffer.
         auto fits = [&](int q) { return 2 * q <= info_.maxViewport && -q >= viewportBoundsMin_; };
+        // For a tile (OrthoView::tile) the geometry spans its whole grid, up to a grid's side away
+        // from the framebuffer: P grows towards twice the grid's side, so that the device clips none of it.
         int P = 1;
         while (P < std::max(width_, height_)) P *= 2;
-        if (fits(2 * P)) P *= 2;
+        const int64_t reach = 2 * int64_t(std::max(view.fullWidth(), view.fullHeight()));
+        while (P < reach && fits(2 * P)) P *= 2;
         exactViewport_ = fits(P);
         P_ = P;
         ViewBlock b{};
@@ -163,7 +166,8 @@ public:
         put(b.dir, view.dir.x(), view.dir.y(), view.dir.z());
         put(b.lo, view.xmin, view.ymin, view.znear);
         put(b.extent, view.xmax - view.xmin, view.ymax - view.ymin, view.zfar - view.znear);
-        put(b.size, double(view.width), double(view.height), 0);
+        put(b.size, double(view.fullWidth()), double(view.fullHeight()), double(view.originX));
+        b.size[3] = double(view.originY);
         if (exactViewport_) {
             b.scaleOffset[0] = b.scaleOffset[1] = 1.0f / float(P);
             b.scaleOffset[2] = b.scaleOffset[3] = 0.0f;

@@ -87,6 +87,10 @@ def main():
             "viewport": [8, 4]}
     w = window_coordinates(view, np.array([[11, 1, 0.5], [14, -1, 2]], "<f4"))
     check(w.dtype == np.float64 and np.array_equal(w, [[4, 1, 0.25], [0, 4, 1]]), f"window_coordinates {w.tolist()}")
+    # A tile of that view: the grid's scale, the origin subtracted.
+    tile = dict(view, viewport=[4, 2], tile={"origin": [2, 1], "grid": [8, 4]})
+    w = window_coordinates(tile, np.array([[11, 1, 0.5], [14, -1, 2]], "<f4"))
+    check(np.array_equal(w, [[2, 0, 0.25], [-2, 3, 1]]), f"window_coordinates of a tile {w.tolist()}")
 
     print(f"{len(failures)} failures" if failures else "all checks hold")
     return 1 if failures else 0

@@ -115,6 +115,13 @@ def check_view(view, where):
     vp = view.get("viewport")
     require(isinstance(vp, list) and len(vp) == 2 and all(is_int(s) and s >= 1 for s in vp),
             f"{where}: viewport {vp!r} is not [width, height]")
+    tile = view.get("tile")
+    if tile is not None:
+        pairs = [tile.get(k) if isinstance(tile, dict) else None for k in ("origin", "grid")]
+        require(all(isinstance(q, list) and len(q) == 2 and all(is_int(s) and s >= 0 for s in q) for q in pairs),
+                f"{where}: tile {tile!r} is not {{origin: [x, y], grid: [width, height]}}")
+        (ox, oy), (gw, gh) = pairs
+        require(ox + vp[0] <= gw and oy + vp[1] <= gh, f"{where}: the tile does not lie inside its grid {gw}x{gh}")
     depth = view.get("depth")
     ok = depth == "D32F" or (isinstance(depth, str) and depth[:1] == "D" and depth[1:].isdigit() and
                              8 <= int(depth[1:]) <= 32 and depth[1:] == str(int(depth[1:])))
@@ -129,9 +136,11 @@ def window_coordinates(view, positions):
     the trace's intervals allow. Origin at the bottom-left corner, y up, depth in [0, 1]."""
     p = positions.astype(np.float64)
     xmin, xmax, ymin, ymax, znear, zfar = map(float, view["box"])
-    width, height = view["viewport"]
+    # A tile of a larger view: the grid's scale, then its origin subtracted (an exact shift).
+    tile = view.get("tile", {"origin": [0, 0], "grid": view["viewport"]})
+    (width, height), (ox, oy) = tile["grid"], tile["origin"]
     x, y, z = (a[0] * p[:, 0] + a[1] * p[:, 1] + a[2] * p[:, 2] for a in (view["right"], view["up"], view["dir"]))
-    return np.stack([(x - xmin) / (xmax - xmin) * width, (y - ymin) / (ymax - ymin) * height,
+    return np.stack([(x - xmin) / (xmax - xmin) * width - ox, (y - ymin) / (ymax - ymin) * height - oy,
                      (z - znear) / (zfar - znear)], axis=1)
 
 

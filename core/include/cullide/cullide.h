@@ -167,6 +167,9 @@ struct PassStats {
     // else 1). width x height is then the largest of their viewports (by pixel count); the
     // triangles rendered and queries are the sums over them.
     uint32_t views = 1;
+    // Executions of the call's command lists: its views, each counted once per tile it was drawn
+    // in (a viewport larger than DepthBackend::maxViewportSide() is drawn in tiles; else = views).
+    uint32_t tiles = 1;
     double seconds = 0;  // wall time of the call, command building and backend included
 };
 
@@ -318,7 +321,8 @@ std::vector<std::vector<uint32_t>> viewGroups(std::span<const Vec3f> positions, 
 // baseWidth x baseHeight): then the base viewport itself. Otherwise the viewport covering the
 // PCS's projected bounds at the wanted pixel (the PCS's aspect, not the base's), shrunk evenly to
 // at most `budget` pixels and `maxSide` per side; if that leaves it no finer than the base, the
-// base viewport.
+// base viewport. (runCullide passes kMaxViewportSide: a backend that draws less per side gets the
+// call in tiles, docs/cullide.md#adaptive-resolution.)
 std::pair<int, int> adaptiveViewport(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
                                      std::span<const TriangleRange> ranges, const Vec3d& dir, double coverage,
                                      int baseWidth, int baseHeight, int64_t budget, int maxSide);

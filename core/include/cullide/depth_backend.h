@@ -96,15 +96,30 @@ struct OrthoView {
     double xmin = -1, xmax = 1, ymin = -1, ymax = 1, znear = -1, zfar = 1;
     int width = 500, height = 500;
     DepthFormat depth;
+    // A tile: this view is the pixels [originX, originX + width) x [originY, originY + height) of
+    // the view of gridWidth x gridHeight pixels over the same box (0: the view is whole, its grid
+    // is width x height). Window coordinates are the whole view's minus the origin, an exact
+    // integer shift, so a tile rasterizes exactly the fragments the whole view has there (every
+    // rule of cullide/raster/rules.h is invariant under integer translation). Cullide draws a call
+    // in tiles when its viewport exceeds DepthBackend::maxViewportSide().
+    int originX = 0, originY = 0, gridWidth = 0, gridHeight = 0;
 
-    // Window coordinates (xw, yw, zw) of a world point, in double (see the conventions above).
+    int fullWidth() const { return gridWidth ? gridWidth : width; }
+    int fullHeight() const { return gridHeight ? gridHeight : height; }
+    bool tiled() const { return gridWidth != 0 || gridHeight != 0; }
+    // The tile [x, x + w) x [y, y + h) of this (whole) view.
+    OrthoView tile(int x, int y, int w, int h) const;
+
+    // Window coordinates (xw, yw, zw) of a world point, in double (see the conventions above; for a
+    // tile, xw = (x - xmin) / (xmax - xmin) * gridWidth - originX, likewise yw).
     Vec3d toWindow(const Vec3f& p) const;
     // A frame whose `dir` is the given direction (normalized), with right/up chosen
     // deterministically (right = normalize(cross(helper, dir)) with helper the world axis least
     // aligned with dir; up = cross(dir, right)).
     static OrthoView looking(const Vec3d& direction);
     // Throws InputError("view", ...) on a non-orthonormal frame, an empty box, a viewport outside
-    // 1..kMaxViewportSide per side, or non-finite numbers.
+    // 1..kMaxViewportSide per side, a tile outside its grid (or a grid over kMaxViewportSide), or
+    // non-finite numbers.
     void validate() const;
 };
 
@@ -212,8 +227,9 @@ public:
     // The CPU reference does; GL only where the driver offers conservative rasterization.
     virtual bool supportsConservative() const { return false; }
 
-    // The largest viewport side this backend can draw (at most kMaxViewportSide). Adaptive
-    // resolution (CullideOptions::autoCoverage) clamps each call's viewport to it.
+    // The largest viewport side this backend can draw (at most kMaxViewportSide). A Cullide call
+    // whose viewport is larger draws it as tiles of at most this side (OrthoView::tile), one
+    // execute() of the call's command list per tile, adding their query results.
     virtual int maxViewportSide() const { return kMaxViewportSide; }
 
     // The current depth buffer.

@@ -290,6 +290,7 @@ nlohmann::ordered_json passJson(const PassStats& p, const CullideOptions& option
                                 {"round", p.round},
                                 {"seconds", p.seconds}};
     if (options.views != ViewMode::Fit) j["views"] = p.views;
+    if (p.tiles != p.views) j["tiles"] = p.tiles;  // drawn in tiles (a backend's limit)
     if (options.directionMode != DirectionMode::Fixed)
         j["direction_vector"] = {p.dirVector.x(), p.dirVector.y(), p.dirVector.z()};
     return j;

@@ -166,6 +166,7 @@ public:
     void setView(const OrthoView& view) override;
     // Runs `list` on the reference and keeps it, with its view and answers, until endFrame().
     std::vector<uint64_t> execute(const CommandList& list) override;
+    int maxViewportSide() const override { return reference_.maxViewportSide(); }
     DepthImage readDepth() override { return reference_.readDepth(); }
     void readDepthInto(DepthImage& out) override { reference_.readDepthInto(out); }
 

@@ -27,6 +27,7 @@
 #include "cullide/depth_backend.h"
 #include "cullide/raster/rules.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -133,6 +134,10 @@ public:
     void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override;
     void setView(const OrthoView& view) override;
     std::vector<uint64_t> execute(const CommandList& list) override;
+    // The smaller of the two backends' limits: a larger view is drawn in tiles both can draw.
+    int maxViewportSide() const override {
+        return std::min(reference_.maxViewportSide(), other_.maxViewportSide());
+    }
     DepthImage readDepth() override;
     void readDepthInto(DepthImage& out) override;
 
