@@ -471,4 +471,19 @@ TEST(StudyCli, PlotDrawsPerCallChartsOfTheMethodAskedFor) {
     EXPECT_NE(out.find("figure11_accumulated.png"), std::string::npos) << out;
 }
 
+// Trap: the per-call chart of an adaptive run, whose calls each have their own viewport (written
+// above the bars), failing or dropping the run: the chart is drawn from the study's JSON lines.
+TEST(StudyCli, PlotDrawsPerCallViewportsOfAnAdaptiveRun) {
+    if (std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") != 0) GTEST_SKIP() << "no matplotlib";
+    test::TempDir dir;
+    std::string out;
+    ASSERT_EQ(runCli("study --scenes bunny:1500 --methods modified --resolutions auto:4 --repeats 1 -q -o " +
+                         (dir / "s.csv").string(),
+                     &out),
+              0)
+        << out;
+    EXPECT_EQ(runCli("plot " + (dir / "s.csv").string() + " -o " + (dir / "p").string(), &out), 0) << out;
+    EXPECT_TRUE(fs::exists(dir / "p" / "figure9_10_passes.png")) << out;
+}
+
 }  // namespace

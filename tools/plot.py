@@ -370,7 +370,20 @@ def draw_passes(ax, passes, title):
     ax2.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: count_text(v)))
     ax.set_xlim(0.3, len(passes) + 0.7)
     ax.set_xlabel("reducePCS call")
-    ax.set_title(title, fontsize=10)
+    # Each call's viewport, where they differ (--resolution auto chooses one per call), above its
+    # bars; "xN": drawn in N tiles (a backend's viewport limit).
+    sizes = [(p.get("width"), p.get("height")) for p in passes]
+    pad = 6
+    if None not in {s for wh in sizes for s in wh} and len(set(sizes)) > 1:
+        import matplotlib.transforms as mtransforms
+        at = mtransforms.blended_transform_factory(ax.transData, ax.transAxes)
+        for i, (p, (w, h)) in zip(idx, zip(passes, sizes)):
+            tiles = p.get("tiles", p.get("views", 1))
+            views = p.get("views", 1)
+            text = f"{w}x{h}" + (f" x{tiles // max(views, 1)}" if tiles > views else "")
+            ax.text(i, 1.02, text, transform=at, rotation=90, fontsize=6, ha="center", va="bottom", color="0.3")
+        pad = 6 + 4.2 * max(len(f"{w}x{h}") for w, h in sizes)
+    ax.set_title(title + ("\n(each call's viewport above its bars)" if pad > 6 else ""), fontsize=10, pad=pad)
 
 
 def accumulated(passes):
