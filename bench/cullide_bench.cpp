@@ -17,6 +17,12 @@
 //     seed 1); res 0 = 500 x 500, 1 = `--resolution auto`. Counters: PCS triangles, reducePCS
 //     calls, the most views of a call, and on clustered runs x_fit, this run's time over the fit
 //     run's of the same scene and resolution (run just before it).
+//   BM_Tiles/<res>/<limit>: one prune (modified) of data/scenes/two_cows_and_bunny.json on the CPU
+//     reference as a backend that draws at most `limit` px per side (raster::ViewportLimit; 0: no
+//     limit), so that larger calls are drawn in tiles (docs/cullide.md#adaptive-resolution); res
+//     0 = 2000 x 2000, 1 = `--resolution auto`. Counters: PCS, the most tiles of a call, same_pcs
+//     (1 when the PCS equals the unlimited run's) and x_whole, this run's time over the unlimited
+//     run's of the same resolution (run just before it).
 //   BM_PruneToExact/<scene>/<triangles>/<switch>: prune + exact stage, --exact-switch never vs
 //     auto (below); x_never is the acceptance ratio.
 //   BM_Hierarchy/<kind>/<triangles>: building one object's hierarchy (the per-frame cost the
@@ -36,6 +42,7 @@
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
 #include "cullide/oracle/oracle.h"
+#include "cullide/raster/backends.h"
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/study/study.h"
 #include "cullide/scene_io.h"
@@ -150,6 +157,38 @@ void BM_Views(benchmark::State& state) {
 BENCHMARK(BM_Views)
     ->ArgNames({"scene", "res", "views"})
     ->ArgsProduct({{0, 1}, {0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_Tiles(benchmark::State& state) {
+    const Scene& scene = viewsScene(0);
+    auto cpu = raster::makeCpuBackend();
+    const int limit = int(state.range(1));
+    std::unique_ptr<raster::ViewportLimit> limited;
+    if (limit > 0) limited = std::make_unique<raster::ViewportLimit>(*cpu, limit);
+    DepthBackend& backend = limited ? static_cast<DepthBackend&>(*limited) : *cpu;
+    CullideOptions o;
+    if (state.range(0) == 1) o.autoCoverage = kDefaultAutoCoverage;
+    else o.width = o.height = 2000;
+    CullideResult r;
+    const auto begin = std::chrono::steady_clock::now();
+    for (auto _ : state) r = runCullide(scene, backend, o);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count() /
+        double(state.iterations());
+    static std::map<int64_t, std::pair<double, std::vector<PcsTriangle>>> whole;  // by res
+    if (limit == 0) whole[state.range(0)] = {ms, r.pcs};
+    else if (whole.count(state.range(0))) {
+        state.counters["x_whole"] = ms / whole[state.range(0)].first;
+        state.counters["same_pcs"] = r.pcs == whole[state.range(0)].second ? 1 : 0;
+    }
+    uint32_t tiles = 0;
+    for (const PassStats& p : r.passes) tiles = std::max(tiles, p.tiles / std::max<uint32_t>(1, p.views));
+    state.counters["pcs"] = double(r.pcs.size());
+    state.counters["tiles_max"] = double(tiles);
+}
+BENCHMARK(BM_Tiles)
+    ->ArgNames({"res", "limit"})
+    ->ArgsProduct({{0, 1}, {0, 1024, 512}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -7,6 +7,7 @@
 #include "cullide/options.h"
 #include "cullide/parallel.h"
 #include "cullide/oracle/oracle.h"
+#include "cullide/raster/backends.h"
 #include "cullide/raster/cpu_backend.h"
 #include "cullide/scene_io.h"
 
@@ -779,32 +780,6 @@ TEST(CullideViews, TouchingNodesShareAGroup) {
 // Bad option values are refused with a message naming the option, before any work.
 // --- Tiles: a call whose viewport exceeds the backend's largest side ---
 
-namespace {
-
-// The CPU reference as a GPU with small limits would look: it draws at most `side` pixels per
-// side and refuses a larger view, so a run over it passes only if Cullide tiles.
-class SmallViewports final : public DepthBackend {
-public:
-    explicit SmallViewports(int side) : side_(side), cpu_(raster::makeCpuBackend()) {}
-    std::string describe() const override { return "at most " + std::to_string(side_) + " px: " + cpu_->describe(); }
-    void setGeometry(std::span<const Vec3f> p, std::span<const Triangle> t) override { cpu_->setGeometry(p, t); }
-    void setView(const OrthoView& view) override {
-        if (view.width > side_ || view.height > side_) throw std::logic_error("a view beyond the backend's limit");
-        tiled += view.tiled();
-        cpu_->setView(view);
-    }
-    std::vector<uint64_t> execute(const CommandList& list) override { return cpu_->execute(list); }
-    bool supportsConservative() const override { return true; }
-    int maxViewportSide() const override { return side_; }
-    DepthImage readDepth() override { return cpu_->readDepth(); }
-    size_t tiled = 0;  // tiles set
-
-private:
-    int side_;
-    std::unique_ptr<raster::CpuBackend> cpu_;
-};
-
-}  // namespace
 
 // Trap: a backend whose largest viewport is smaller than a call's (a GPU's limits under
 // `--resolution auto`, or a fixed size) must not change the PCS: clamping the viewport (coarser
@@ -813,6 +788,15 @@ private:
 // change it. Every method, fixed and adaptive resolution, fit and clustered views: the PCS and
 // every call's statistics equal the whole-view run's, and the calls really were tiled.
 TEST(CullideTiles, TiledCallsKeepTheWholeViewsPcs) {
+    {  // The limit itself: an absurd side is refused, and so is a view beyond it.
+        auto cpu = raster::makeCpuBackend();
+        EXPECT_THROW(raster::ViewportLimit(*cpu, 0), InputError);
+        EXPECT_THROW(raster::ViewportLimit(*cpu, kMaxViewportSide + 1), InputError);
+        raster::ViewportLimit limit(*cpu, 64);
+        OrthoView v;
+        v.width = 65, v.height = 10;
+        EXPECT_THROW(limit.setView(v), InputError);
+    }
     const Scene s = sceneOf({{icosphere(2), rotation(0.2, 0.3, 0.1)},
                              {icosphere(2), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))},
                              {selfCrossingRibbon(41), rotation(0.31, 0.47, 0.23, Vec3f(0.5f, 0, 0))}});
@@ -826,12 +810,13 @@ TEST(CullideTiles, TiledCallsKeepTheWholeViewsPcs) {
                 o.autoCoverage = autoCoverage;
                 o.hierarchy.leafSize = 8;
                 auto cpu = raster::makeCpuBackend();
-                SmallViewports small(64);
-                const CullideResult want = runCullide(s, *cpu, o), got = runCullide(s, small, o);
+                const CullideResult want = runCullide(s, *cpu, o);
+                raster::ViewportLimit small(*cpu, 64);  // refuses larger views: Cullide must tile
+                const CullideResult got = runCullide(s, small, o);
                 const std::string what = std::string(toString(method)) + (autoCoverage > 0 ? " auto " : " 150 ") +
                     toString(views);
                 EXPECT_EQ(got.pcs, want.pcs) << what;
-                EXPECT_GT(small.tiled, 0u) << what << ": nothing was tiled";
+                EXPECT_GT(small.tilesSet(), 0u) << what << ": nothing was tiled";
                 ASSERT_EQ(got.passes.size(), want.passes.size()) << what;
                 size_t tiledCalls = 0;
                 for (size_t i = 0; i < got.passes.size(); ++i) {

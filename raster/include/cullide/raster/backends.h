@@ -40,4 +40,33 @@ std::unique_ptr<GpuBackend> makeGpuBackend(const std::string& name);
 // The GPU backend names: gl, vulkan.
 const std::vector<std::string>& gpuBackendNames();
 
+// Another backend as one that draws at most `side` pixels per side (1..kMaxViewportSide) would
+// look: maxViewportSide() says `side` and setView() refuses a larger view (InputError "view").
+// Everything else goes to `inner`, which must outlive it. Cullide then draws larger calls in tiles
+// (docs/cullide.md#adaptive-resolution): the tests and BM_Tiles run that on the CPU reference, as a
+// GPU with small limits would.
+class ViewportLimit final : public DepthBackend {
+public:
+    ViewportLimit(DepthBackend& inner, int side);
+    std::string describe() const override;
+    void setGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override {
+        inner_.setGeometry(positions, triangles);
+    }
+    bool borrowGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override {
+        return inner_.borrowGeometry(positions, triangles);
+    }
+    void setView(const OrthoView& view) override;
+    std::vector<uint64_t> execute(const CommandList& commands) override { return inner_.execute(commands); }
+    bool supportsConservative() const override { return inner_.supportsConservative(); }
+    int maxViewportSide() const override { return side_; }
+    DepthImage readDepth() override { return inner_.readDepth(); }
+    void readDepthInto(DepthImage& out) override { inner_.readDepthInto(out); }
+    uint64_t tilesSet() const { return tiles_; }  // views set that were tiles (OrthoView::tiled)
+
+private:
+    DepthBackend& inner_;
+    int side_;
+    uint64_t tiles_ = 0;
+};
+
 }  // namespace cullide::raster
