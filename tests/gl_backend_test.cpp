@@ -116,28 +116,11 @@ TEST_P(GlFormats, PixelAlignedDepthSeparatedBoxesAgreeExactly) {
 TEST_P(GlFormats, SamplesPassedOfRandomTrianglesAgreeExactly) {
     GL_OR_SKIP();
     const DepthFormat f = GetParam();
-    std::mt19937 rng(20030707);
-    std::uniform_real_distribution<float> xy(-4.0f, 68.0f), z(0.0f, 1.0f), small(-3.0f, 3.0f);
     std::vector<Vec3f> p;
     std::vector<Triangle> t;
-    for (uint32_t i = 0; i < 300; ++i) {
-        // Mix large triangles, slivers and tiny ones.
-        const Vec3f a(xy(rng), xy(rng), z(rng));
-        const bool tiny = i % 3 == 0;
-        const Vec3f b = tiny ? a + Vec3f(small(rng), small(rng), 0) : Vec3f(xy(rng), xy(rng), z(rng));
-        const Vec3f c = tiny ? a + Vec3f(small(rng), small(rng), 0) : Vec3f(xy(rng), xy(rng), z(rng));
-        p.insert(p.end(), {a, b, c});
-        t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
-    }
+    test::randomWindowTriangles(p, t);
     const OrthoView view = test::windowView(64, 64, f);
-    CommandList list;
-    list.depthFunc(DepthFunc::Always);
-    list.depthMask(false);
-    for (uint32_t i = 0; i < t.size(); ++i) {
-        list.beginQuery();
-        list.draw(i, 1);
-        list.endQuery();
-    }
+    const CommandList list = test::coverageQueries(t.size());
     std::unique_ptr<GlBackend> gl = raster::makeGlBackend();
     std::unique_ptr<raster::CpuBackend> cpu = raster::makeCpuBackend();
     std::vector<uint64_t> r[2];
@@ -166,42 +149,18 @@ INSTANTIATE_TEST_SUITE_P(GlBackend, GlFormats,
 // tiles' counts add up to the reference's count over the whole view.
 TEST(GlBackend, TilesAddUpToTheWholeViewsCoverage) {
     GL_OR_SKIP();
-    std::mt19937 rng(20030707);
-    std::uniform_real_distribution<float> xy(-4.0f, 68.0f), z(0.0f, 1.0f), small(-3.0f, 3.0f);
     std::vector<Vec3f> p;
     std::vector<Triangle> t;
-    for (uint32_t i = 0; i < 300; ++i) {
-        const Vec3f a(xy(rng), xy(rng), z(rng));
-        const bool tiny = i % 3 == 0;
-        const Vec3f b = tiny ? a + Vec3f(small(rng), small(rng), 0) : Vec3f(xy(rng), xy(rng), z(rng));
-        const Vec3f c = tiny ? a + Vec3f(small(rng), small(rng), 0) : Vec3f(xy(rng), xy(rng), z(rng));
-        p.insert(p.end(), {a, b, c});
-        t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
-    }
+    test::randomWindowTriangles(p, t);
     const OrthoView view = test::windowView(64, 64);
-    CommandList list;
-    list.depthFunc(DepthFunc::Always);
-    list.depthMask(false);
-    for (uint32_t i = 0; i < t.size(); ++i) {
-        list.beginQuery();
-        list.draw(i, 1);
-        list.endQuery();
-    }
+    const CommandList list = test::coverageQueries(t.size());
     std::unique_ptr<raster::CpuBackend> cpu = raster::makeCpuBackend();
     cpu->setGeometry(p, t);
     cpu->setView(view);
     const std::vector<uint64_t> want = cpu->execute(list);
     auto gpu = raster::makeGlBackend();
     gpu->setGeometry(p, t);
-    std::vector<uint64_t> got(t.size(), 0);
-    for (int y = 0; y < 64; y += 24)
-        for (int x = 0; x < 64; x += 24) {
-            gpu->setView(view.tile(x, y, std::min(24, 64 - x), std::min(24, 64 - y)));
-            const std::vector<uint64_t> r = gpu->execute(list);
-            ASSERT_EQ(r.size(), got.size());
-            for (size_t i = 0; i < r.size(); ++i) got[i] += r[i];
-        }
-    EXPECT_EQ(got, want);
+    EXPECT_EQ(test::tiledResults(*gpu, view, list, 24), want);
 }
 
 // Trap: a backend that reports nothing useful about what it got (renderer, version, subpixel and

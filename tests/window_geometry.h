@@ -6,7 +6,9 @@
 #include "cullide/depth_backend.h"
 #include "cullide/raster/cpu_backend.h"
 
+#include <algorithm>
 #include <memory>
+#include <random>
 #include <vector>
 
 namespace cullide::test {
@@ -40,6 +42,51 @@ inline void addQuad(std::vector<Vec3f>& p, std::vector<Triangle>& t, float x0, f
     p.insert(p.end(), {Vec3f(x0, y0, z), Vec3f(x1, y0, z), Vec3f(x1, y1, z), Vec3f(x0, y1, z)});
     t.push_back({b, b + 1, b + 2});
     t.push_back({b, b + 2, b + 3});
+}
+
+// 300 random triangles in the window coordinates of a 64x64 windowView, x and y in [-4, 68] (some
+// cross the viewport's edges), depth in [0, 1]; every third is tiny (its other vertices within 3 px
+// of its first). Fixed seed: the GPU backends' coverage tests compare them with the reference.
+inline void randomWindowTriangles(std::vector<Vec3f>& p, std::vector<Triangle>& t) {
+    std::mt19937 rng(20030707);
+    std::uniform_real_distribution<float> xy(-4.0f, 68.0f), z(0.0f, 1.0f), small(-3.0f, 3.0f);
+    for (uint32_t i = 0; i < 300; ++i) {
+        const Vec3f a(xy(rng), xy(rng), z(rng));
+        const bool tiny = i % 3 == 0;
+        const Vec3f b = tiny ? a + Vec3f(small(rng), small(rng), 0) : Vec3f(xy(rng), xy(rng), z(rng));
+        const Vec3f c = tiny ? a + Vec3f(small(rng), small(rng), 0) : Vec3f(xy(rng), xy(rng), z(rng));
+        const uint32_t base = uint32_t(p.size());
+        p.insert(p.end(), {a, b, c});
+        t.push_back({base, base + 1, base + 2});
+    }
+}
+
+// One SAMPLES_PASSED query per triangle under ALWAYS with writes off: each result is the
+// triangle's coverage, whatever was drawn before.
+inline CommandList coverageQueries(size_t triangles) {
+    CommandList list;
+    list.depthFunc(DepthFunc::Always);
+    list.depthMask(false);
+    for (uint32_t i = 0; i < uint32_t(triangles); ++i) {
+        list.beginQuery();
+        list.draw(i, 1);
+        list.endQuery();
+    }
+    return list;
+}
+
+// The results of `list` on `backend` (geometry set) drawn in side x side tiles of `view`
+// (OrthoView::tile, row by row), each query's counts added over the tiles.
+inline std::vector<uint64_t> tiledResults(DepthBackend& backend, const OrthoView& view, const CommandList& list,
+                                          int side) {
+    std::vector<uint64_t> sum(list.queryCount(), 0);
+    for (int y = 0; y < view.height; y += side)
+        for (int x = 0; x < view.width; x += side) {
+            backend.setView(view.tile(x, y, std::min(side, view.width - x), std::min(side, view.height - y)));
+            const std::vector<uint64_t> r = backend.execute(list);
+            for (size_t i = 0; i < r.size() && i < sum.size(); ++i) sum[i] += r[i];
+        }
+    return sum;
 }
 
 inline OrthoView windowView(int W, int H, DepthFormat format = DepthFormat::unorm(24)) {
