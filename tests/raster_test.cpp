@@ -1164,6 +1164,57 @@ TEST(Tiles, TilesHoldTheWholeViewsFragments) {
     }
 }
 
+// Trap: the window transform done only for the vertices a list draws (a list that draws few
+// triangles of a large geometry, as the deep reducePCS calls do): a vertex left untransformed, one
+// still holding the previous view's coordinates (a stale stamp), a shared vertex, or a later list
+// under the same view that draws other triangles, or all of them. A grid mesh (shared vertices)
+// under two views; on one backend, lists of a few ranges after the view changes; on another, the
+// same lists after a list that draws everything under the same view (every vertex transformed):
+// same counts and depth images.
+TEST(CpuBackend, WindowOfTheDrawnVerticesOnly) {
+    Geo g;
+    const int nx = 60, ny = 40;
+    for (int j = 0; j <= ny; ++j)
+        for (int i = 0; i <= nx; ++i) g.add(float(i) * 1.7f + 0.3f * float(j % 3), float(j) * 1.9f, float((i * 7 + j * 3) % 11) / 11.0f);
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const uint32_t a = uint32_t(j * (nx + 1) + i), b = a + 1, c = a + uint32_t(nx + 1), d = c + 1;
+            g.tri(a, b, d);
+            g.tri(a, d, c);
+        }
+    const uint32_t n = uint32_t(g.triangles.size());
+    OrthoView first = windowView(120, 90), second = windowView(160, 100);
+    first.xmax = 100, first.ymax = 75;
+    second.xmin = 5, second.xmax = 105.5, second.ymin = -3, second.ymax = 80;
+    auto ranges = [](std::initializer_list<std::array<uint32_t, 2>> rs) {
+        CommandList l;
+        l.clear(1.0);
+        for (const auto& r : rs) {
+            l.beginQuery();
+            l.draw(r[0], r[1]);
+            l.endQuery();
+        }
+        return l;
+    };
+    const CommandList all = ranges({{0, n}});
+    const CommandList few = ranges({{10, 30}, {900, 40}, {4000, 25}});
+    const CommandList others = ranges({{11, 30}, {2500, 60}, {4700, 10}});  // overlapping and new vertices
+    CpuBackendOptions o;
+    o.threads = 2;
+    auto sparse = backendFor(g, first, o), dense = backendFor(g, second, o);
+    sparse->execute(all);  // every vertex transformed under the first view
+    sparse->setView(second);
+    dense->execute(all);
+    for (const CommandList* l : {&few, &others, &all, &few}) {
+        const std::vector<uint64_t> got = sparse->execute(*l), want = dense->execute(*l);
+        EXPECT_EQ(got, want);
+        EXPECT_EQ(sparse->readDepth().values, dense->readDepth().values);
+        uint64_t covered = 0;
+        for (uint64_t c : want) covered += c;
+        EXPECT_GT(covered, 0u) << "sanity: the ranges cover pixels";
+    }
+}
+
 // Trap: releaseScratch() (trace recording frees the records between frames) leaving the backend
 // without per-tile state or with stale records: lists after it, with and without a new view,
 // must give what a backend that never released gives, for the plain and the conservative path.

@@ -37,10 +37,14 @@ int64_t floorDiv(int64_t a, int64_t b) {
 
 }  // namespace
 
-WindowError windowError(const OrthoView& view, std::span<const Vec3f> positions) {
+double positionsMagnitude(std::span<const Vec3f> positions) {
     double m = 0;
     for (const Vec3f& p : positions)
         m = std::max(m, double(std::abs(p.x())) + double(std::abs(p.y())) + double(std::abs(p.z())));
+    return m;
+}
+
+WindowError windowError(const OrthoView& view, double m) {
     WindowError e;
     // A tile's window coordinates are the whole view's minus an integer (exact): the grid's error.
     const double ax =

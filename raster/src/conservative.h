@@ -28,7 +28,10 @@ namespace cullide::raster::detail {
 struct WindowError {
     double xy = 0, z = 0;
 };
-WindowError windowError(const OrthoView& view, std::span<const Vec3f> positions);
+// The bound for a view, from M = positionsMagnitude(positions), the largest sum_k |p_k| of the
+// geometry's vertices (view-independent: computed once per geometry).
+WindowError windowError(const OrthoView& view, double M);
+double positionsMagnitude(std::span<const Vec3f> positions);
 
 // A triangle set up for conservative rasterization.
 struct ConsTri {

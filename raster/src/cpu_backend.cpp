@@ -99,7 +99,8 @@ public:
         positions_ = ownedPositions_;
         triangles_ = ownedTriangles_;
         borrowed_ = false;
-        windowValid_ = false;
+        windowValid_ = windowAll_ = false;
+        magnitude_ = -1;
     }
 
     bool borrowGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override {
@@ -109,7 +110,8 @@ public:
         positions_ = positions;
         triangles_ = triangles;
         borrowed_ = true;
-        windowValid_ = false;
+        windowValid_ = windowAll_ = false;
+        magnitude_ = -1;
         return true;
     }
 
@@ -133,7 +135,9 @@ public:
         }
         std::vector<WinVertex>().swap(window_);
         std::vector<SnapVertex>().swap(snapped_);
-        windowValid_ = false;
+        std::vector<uint32_t>().swap(stamps_);
+        windowValid_ = windowAll_ = false;
+        magnitude_ = -1;
         plain_ = {};
         events_ = {};
         for (TileOut& out : tileOut_) std::vector<detail::QueryCount>().swap(out.queries);  // one per tile: kept
@@ -147,7 +151,7 @@ public:
             !haveView_ || view.width != view_.width || view.height != view_.height || !(view.depth == view_.depth);
         view_ = view;
         haveView_ = true;
-        windowValid_ = false;
+        windowValid_ = windowAll_ = false;
         params_.subpixelBits = options_.subpixelBits;
         params_.fillRule = options_.fillRule;
         params_.width = view.width;
@@ -195,11 +199,11 @@ public:
         stats_ = RasterStats{};
         std::vector<uint64_t> results;
         inArena([&] {
-            updateWindow();
+            updateWindow(list);
             if (list.conservativeCount() > 0) {
                 ensureIntervals();
-                if (!consErrValid_) consErr_ = detail::windowError(view_, positions_);
-                consErrValid_ = true;
+                if (magnitude_ < 0) magnitude_ = detail::positionsMagnitude(positions_);
+                consErr_ = detail::windowError(view_, magnitude_);
             }
             if (options_.scalarReference)
                 results = detail::executeReference(list, window_, triangles_, params_, view_.depth, state_, depth_,
@@ -248,23 +252,55 @@ private:
         ihi_.assign(n, kEmptyIntervalHi);
     }
 
-    // Step 2: window coordinates (and snapped positions) of all vertices, once per geometry + view.
-    void updateWindow() {
-        if (windowValid_) return;
-        consErrValid_ = false;
-        window_.resize(positions_.size());
-        snapped_.resize(positions_.size());
-        parallelFor(0, positions_.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t v = r.begin(); v != r.end(); ++v) {
-                const Vec3d w = view_.toWindow(positions_[v]);
-                window_[v] = {w.x(), w.y(), w.z()};
-                SnapVertex& s = snapped_[v];
-                s.inside = detail::insideClipVolume(window_[v], params_);
-                s.x = s.inside ? int32_t(snapToFixed(w.x(), params_.subpixelBits)) : 0;
-                s.y = s.inside ? int32_t(snapToFixed(w.y(), params_.subpixelBits)) : 0;
+    // Step 2: window coordinates (and snapped positions) of the vertices `list` draws, once per
+    // geometry + view. Setup reads only the drawn triangles' vertices. A list that draws few
+    // triangles for its geometry (the deep reducePCS calls: a few thousand of a mesh's hundreds of
+    // thousands) transforms just theirs, each once per view (stamped); otherwise all of them, in
+    // parallel. Either way a vertex gets the same numbers.
+    void updateWindow(const CommandList& list) {
+        if (windowAll_) return;
+        if (!windowValid_) {
+            window_.resize(positions_.size());
+            snapped_.resize(positions_.size());
+            stamps_.resize(positions_.size(), 0);
+            if (++stamp_ == 0) {  // wrapped: every stamp is stale
+                std::fill(stamps_.begin(), stamps_.end(), 0);
+                stamp_ = 1;
             }
-        });
-        windowValid_ = true;
+            windowValid_ = true;
+        }
+        uint64_t drawn = 0;  // triangles drawn, a range repeated by the next draw counted once
+        const Command* last = nullptr;
+        for (const Command& c : list.commands()) {
+            if (c.op != Command::Op::Draw && c.op != Command::Op::DrawConservative) continue;
+            if (!last || last->first != c.first || last->count != c.count) drawn += c.count;
+            last = &c;
+        }
+        if (3 * drawn >= positions_.size()) {
+            parallelFor(0, positions_.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
+                for (size_t v = r.begin(); v != r.end(); ++v) transformVertex(v);
+            });
+            windowAll_ = true;
+            return;
+        }
+        for (const Command& c : list.commands()) {
+            if (c.op != Command::Op::Draw && c.op != Command::Op::DrawConservative) continue;
+            for (uint32_t t = c.first; t < c.first + c.count; ++t)
+                for (uint32_t v : triangles_[t])
+                    if (stamps_[v] != stamp_) {
+                        transformVertex(v);
+                        stamps_[v] = stamp_;
+                    }
+        }
+    }
+
+    void transformVertex(size_t v) {
+        const Vec3d w = view_.toWindow(positions_[v]);
+        window_[v] = {w.x(), w.y(), w.z()};
+        SnapVertex& s = snapped_[v];
+        s.inside = detail::insideClipVolume(window_[v], params_);
+        s.x = s.inside ? int32_t(snapToFixed(w.x(), params_.subpixelBits)) : 0;
+        s.y = s.inside ? int32_t(snapToFixed(w.y(), params_.subpixelBits)) : 0;
     }
 
     // Steps 3-7 (step 1 is execute's, step 2 updateWindow's).
@@ -332,7 +368,12 @@ private:
     SetupParams params_;
     std::vector<WinVertex> window_;
     std::vector<SnapVertex> snapped_;  // window_ snapped once per vertex (fast path)
-    bool windowValid_ = false;
+    // window_ and snapped_ hold the current view's numbers for every vertex (windowAll_), or for
+    // those whose stamp is stamp_; windowValid_: sized, stamp_ this view's.
+    bool windowValid_ = false, windowAll_ = false;
+    std::vector<uint32_t> stamps_;
+    uint32_t stamp_ = 0;
+    double magnitude_ = -1;  // detail::positionsMagnitude of the geometry (< 0: not yet)
     std::vector<uint32_t> depth_;
     bool depthPending_ = false;  // depth_ reads as 1.0 everywhere, not yet written (setView)
     detail::PipelineState state_;
@@ -348,7 +389,6 @@ private:
     // Conservative mode: the interval buffer, toWindow's error bound, records.
     std::vector<uint32_t> ilo_, ihi_;
     detail::WindowError consErr_;
-    bool consErrValid_ = false;
     detail::RecordSet<ConsRec> conservative_;
 };
 
