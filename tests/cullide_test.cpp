@@ -778,6 +778,24 @@ TEST(CullideViews, TouchingNodesShareAGroup) {
 }
 
 // Bad option values are refused with a message naming the option, before any work.
+// Trap: a view fitted to every vertex of the geometry rather than to the triangles drawn (the
+// first levels, which draw everything, fit their view from the vertices once each): a vertex no
+// triangle uses, far away, would stretch the view and make every triangle sub-pixel. The same
+// meshes with such a vertex give the same PCS and calls as without it.
+TEST(Cullide, UnusedVerticesDoNotWidenTheView) {
+    const Scene clean = sceneOf({{icosphere(2), rotation(0.2, 0.3, 0.1)},
+                                 {icosphere(2), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))}});
+    Mesh far = icosphere(2);
+    far.positions.push_back(Vec3f(1000, -800, 600));  // used by no triangle
+    const Scene withFar = sceneOf({{far, rotation(0.2, 0.3, 0.1)},
+                                   {icosphere(2), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))}});
+    const CullideResult want = prune(clean, CullMethod::Modified, 8), got = prune(withFar, CullMethod::Modified, 8);
+    EXPECT_FALSE(want.pcs.empty());
+    EXPECT_EQ(got.pcs, want.pcs);
+    ASSERT_EQ(got.passes.size(), want.passes.size());
+    for (size_t i = 0; i < got.passes.size(); ++i) EXPECT_EQ(got.passes[i].nodesOut, want.passes[i].nodesOut) << i;
+}
+
 // --- Tiles: a call whose viewport exceeds the backend's largest side ---
 
 

@@ -326,6 +326,10 @@ std::vector<TriangleRange> piecesOf(std::span<const TriangleRange> ranges) {
 
 }  // namespace
 
+namespace {
+OrthoView fitBox(OrthoView view, Vec3d lo, Vec3d hi);
+}  // namespace
+
 OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
                   std::span<const TriangleRange> ranges, const Vec3d& dir, int width, int height,
                   const DepthFormat& depth) {
@@ -353,6 +357,44 @@ OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> tr
     });
     Vec3d lo(inf, inf, inf), hi(-inf, -inf, -inf);
     for (const auto& [l, h] : bounds) lo = lo.cwiseMin(l), hi = hi.cwiseMax(h);
+    return fitBox(view, lo, hi);
+}
+
+namespace {
+
+// fitView of every point: for a draw of every triangle of a geometry whose every vertex some
+// triangle uses, the same view (min and max are exact), from each vertex once instead of each
+// triangle corner (a vertex is the corner of about six triangles).
+OrthoView fitViewToPoints(std::span<const Vec3f> positions, const Vec3d& dir, int width, int height,
+                          const DepthFormat& depth) {
+    OrthoView view = OrthoView::looking(dir);
+    view.width = width;
+    view.height = height;
+    view.depth = depth;
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    constexpr size_t kBlock = 4096;
+    std::vector<std::pair<Vec3d, Vec3d>> bounds((positions.size() + kBlock - 1) / kBlock);
+    parallelFor(0, bounds.size(), 1, [&](const auto& block) {
+        for (size_t i = block.begin(); i != block.end(); ++i) {
+            Vec3d lo(inf, inf, inf), hi(-inf, -inf, -inf);
+            for (size_t v = i * kBlock; v < std::min(positions.size(), (i + 1) * kBlock); ++v) {
+                const Vec3d p = positions[v].cast<double>();
+                const Vec3d q(view.right.dot(p), view.up.dot(p), view.dir.dot(p));
+                lo = lo.cwiseMin(q);
+                hi = hi.cwiseMax(q);
+            }
+            bounds[i] = {lo, hi};
+        }
+    });
+    Vec3d lo(inf, inf, inf), hi(-inf, -inf, -inf);
+    for (const auto& [l, h] : bounds) lo = lo.cwiseMin(l), hi = hi.cwiseMax(h);
+    return fitBox(view, lo, hi);
+}
+
+// The box of fitView around the bounds [lo, hi] in `view`'s frame, at its viewport and depth.
+OrthoView fitBox(OrthoView view, Vec3d lo, Vec3d hi) {
+    const int width = view.width, height = view.height;
+    const DepthFormat depth = view.depth;
     if (!(lo.x() <= hi.x())) lo = hi = Vec3d::Zero();  // nothing to fit: any valid view will do
 
     // Square pixels: the pixel size that fits both extents; the box centred on the bounds.
@@ -376,6 +418,8 @@ OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> tr
     if (view.zfar < hi.z() + margin * range) view.zfar = hi.z() + margin * range;
     return view;
 }
+
+}  // namespace
 
 std::pair<int, int> adaptiveViewport(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
                                      std::span<const TriangleRange> ranges, const Vec3d& dir, double coverage,
@@ -854,7 +898,12 @@ private:
         if (opt_.autoCoverage > 0)
             std::tie(w, h) = adaptiveViewport(positions_, triangles_, ranges_, dir_, opt_.autoCoverage, opt_.width,
                                               opt_.height, opt_.autoBudget, kMaxViewportSide);
-        view_ = fitView(positions_, triangles_, ranges_, dir_, w, h, opt_.depth);
+        size_t drawn = 0;
+        for (const TriangleRange& r : ranges_) drawn += r.count;
+        // Every triangle drawn (the first levels): positions_ holds only used vertices (build()
+        // drops the others), so their bounds are the triangles'.
+        view_ = drawn == triangles_.size() ? fitViewToPoints(positions_, dir_, w, h, opt_.depth)
+                                           : fitView(positions_, triangles_, ranges_, dir_, w, h, opt_.depth);
         tiles_.clear();
         const int side = std::clamp(backend_.maxViewportSide(), 1, kMaxViewportSide);
         if (w <= side && h <= side) {

@@ -78,8 +78,6 @@ namespace {
 // fan's triangles have non-zero snapped area (before dropping empty ones).
 int fanPolygon(const WinVertex* poly, int n, const int64_t* sx, const int64_t* sy, const WinVertex& v0,
                const WinVertex& v1, const WinVertex& v2, const SetupParams& params, SnappedTri* out, int& count) {
-    const int S = params.subpixelBits;
-    const double unit = std::ldexp(1.0, -S);
     int nonZero = 0;
     DepthPlane plane;  // of the whole (unclipped, unsnapped) triangle, computed on first use
     int havePlane = -1;
@@ -104,6 +102,7 @@ int fanPolygon(const WinVertex* poly, int n, const int64_t* sx, const int64_t* s
             t.plane = plane;
         } else {
             // Collinear in double but not after snapping: the plane of the snapped sub-triangle.
+            const double unit = std::ldexp(1.0, -params.subpixelBits);  // rare: not paid per triangle
             WinVertex s[3];
             for (int v = 0; v < 3; ++v) s[v] = {double(t.x[v]) * unit, double(t.y[v]) * unit, poly[idx[v]].z};
             if (!planeFrom(s[0], s[1], s[2], t.plane)) t.plane = DepthPlane{s[0].x, s[0].y, s[0].z, 0.0, 0.0};
