@@ -48,12 +48,22 @@ void makeEvents(const CommandList& list, const DepthFormat& format, const TileGr
         }
         events.push_back(e);
     }
-    // Tile rectangles of the draws and their setup statistics, O(triangles drawn).
+    // Tile rectangles of the draws and their setup statistics, O(triangles drawn). A range drawn
+    // again (reducePCS draws each node two to four times in a list) copies its first draw's.
     out.stats.assign(events.size(), {0, 0, 0});
+    out.source.resize(events.size());
+    out.firstDraw[0].clear(), out.firstDraw[1].clear();
+    for (size_t k = 0; k < events.size(); ++k) {
+        const Event& e = events[k];
+        out.source[k] = uint32_t(k);
+        if (e.clears()) continue;
+        const uint64_t key = uint64_t(e.first) << 32 | e.count;
+        out.source[k] = out.firstDraw[e.conservative ? 1 : 0].try_emplace(key, uint32_t(k)).first->second;
+    }
     parallelFor(0, events.size(), 256, [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
             Event& e = events[k];
-            if (e.clears()) continue;
+            if (e.clears() || out.source[k] != k) continue;
             const RecordIndex& recs = e.conservative ? conservative : plain;
             int tx0 = grid.tilesX, ty0 = grid.tilesY, tx1 = -1, ty1 = -1;
             for (uint32_t i = e.recBegin; i < e.recEnd; ++i) {
@@ -76,6 +86,11 @@ void makeEvents(const CommandList& list, const DepthFormat& format, const TileGr
             }
         }
     });
+    for (size_t k = 0; k < events.size(); ++k)
+        if (out.source[k] != k) {
+            events[k].tiles = events[out.source[k]].tiles;
+            out.stats[k] = out.stats[out.source[k]];
+        }
     for (const auto& s : out.stats) {
         stats.rejected += s[0];
         stats.clipped += s[1];

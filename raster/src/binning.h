@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <unordered_map>
 #include <vector>
 
 namespace cullide::raster::detail {
@@ -155,6 +156,10 @@ struct EventList {
     std::vector<uint32_t> tiles;  // the tiles each event's records touch
     std::vector<std::vector<uint32_t>> blockTiles;  // tiles per block of events, before concatenation
     std::vector<uint32_t> counts;  // binning scratch
+    // makeEvents' scratch: per event, the first event drawing the same range (itself if none),
+    // found through the first draw of each (first, count), plain and conservative.
+    std::vector<uint32_t> source;
+    std::unordered_map<uint64_t, uint32_t> firstDraw[2];
 };
 
 // Step 5a: the clears and draws of `list` as events, with the state that `walk` follows; each
