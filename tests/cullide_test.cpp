@@ -783,12 +783,12 @@ TEST(CullideViews, TouchingNodesShareAGroup) {
 // triangle uses, far away, would stretch the view and make every triangle sub-pixel. The same
 // meshes with such a vertex give the same PCS and calls as without it.
 TEST(Cullide, UnusedVerticesDoNotWidenTheView) {
-    const Scene clean = sceneOf({{icosphere(2), rotation(0.2, 0.3, 0.1)},
-                                 {icosphere(2), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))}});
+    const Scene clean = sceneOf(
+        {{icosphere(2), rotation(0.2, 0.3, 0.1)}, {icosphere(2), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))}});
     Mesh far = icosphere(2);
     far.positions.push_back(Vec3f(1000, -800, 600));  // used by no triangle
-    const Scene withFar = sceneOf({{far, rotation(0.2, 0.3, 0.1)},
-                                   {icosphere(2), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))}});
+    const Scene withFar =
+        sceneOf({{far, rotation(0.2, 0.3, 0.1)}, {icosphere(2), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))}});
     const CullideResult want = prune(clean, CullMethod::Modified, 8), got = prune(withFar, CullMethod::Modified, 8);
     EXPECT_FALSE(want.pcs.empty());
     EXPECT_EQ(got.pcs, want.pcs);
@@ -797,7 +797,6 @@ TEST(Cullide, UnusedVerticesDoNotWidenTheView) {
 }
 
 // --- Tiles: a call whose viewport exceeds the backend's largest side ---
-
 
 // Trap: a backend whose largest viewport is smaller than a call's (a GPU's limits under
 // `--resolution auto`, or a fixed size) must not change the PCS: clamping the viewport (coarser
@@ -831,8 +830,8 @@ TEST(CullideTiles, TiledCallsKeepTheWholeViewsPcs) {
                 const CullideResult want = runCullide(s, *cpu, o);
                 raster::ViewportLimit small(*cpu, 64);  // refuses larger views: Cullide must tile
                 const CullideResult got = runCullide(s, small, o);
-                const std::string what = std::string(toString(method)) + (autoCoverage > 0 ? " auto " : " 150 ") +
-                    toString(views);
+                const std::string what =
+                    std::string(toString(method)) + (autoCoverage > 0 ? " auto " : " 150 ") + toString(views);
                 EXPECT_EQ(got.pcs, want.pcs) << what;
                 EXPECT_GT(small.tilesSet(), 0u) << what << ": nothing was tiled";
                 ASSERT_EQ(got.passes.size(), want.passes.size()) << what;

@@ -1175,7 +1175,8 @@ TEST(CpuBackend, WindowOfTheDrawnVerticesOnly) {
     Geo g;
     const int nx = 60, ny = 40;
     for (int j = 0; j <= ny; ++j)
-        for (int i = 0; i <= nx; ++i) g.add(float(i) * 1.7f + 0.3f * float(j % 3), float(j) * 1.9f, float((i * 7 + j * 3) % 11) / 11.0f);
+        for (int i = 0; i <= nx; ++i)
+            g.add(float(i) * 1.7f + 0.3f * float(j % 3), float(j) * 1.9f, float((i * 7 + j * 3) % 11) / 11.0f);
     for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i) {
             const uint32_t a = uint32_t(j * (nx + 1) + i), b = a + 1, c = a + uint32_t(nx + 1), d = c + 1;

@@ -279,7 +279,6 @@ TEST(VulkanBackend, TilesAddUpToTheWholeViewsCoverage) {
     EXPECT_NO_VALIDATION_MESSAGES(*gpu);
 }
 
-
 // Trap: a backend that reports nothing useful about what it got (device, driver, format actually
 // used), or a format other than the one asked for without saying so.
 TEST(VulkanBackend, DescribeNamesDeviceDriverAndFormat) {

@@ -911,7 +911,8 @@ private:
             return;
         }
         for (int y = 0; y < h; y += side)
-            for (int x = 0; x < w; x += side) tiles_.push_back(view_.tile(x, y, std::min(side, w - x), std::min(side, h - y)));
+            for (int x = 0; x < w; x += side)
+                tiles_.push_back(view_.tile(x, y, std::min(side, w - x), std::min(side, h - y)));
     }
 
     // Runs list_ under the current view: once, or once per tile. A tile holds exactly the

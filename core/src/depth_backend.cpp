@@ -129,14 +129,15 @@ void OrthoView::validate() const {
                              std::to_string(width) + "x" + std::to_string(height));
     if (tiled()) {
         if (gridWidth < 1 || gridWidth > kMaxViewportSide || gridHeight < 1 || gridHeight > kMaxViewportSide)
-            throw InputError("view", "a tile's grid must be 1.." + std::to_string(kMaxViewportSide) +
-                                         " pixels per side, got " + std::to_string(gridWidth) + "x" +
-                                         std::to_string(gridHeight));
+            throw InputError("view",
+                             "a tile's grid must be 1.." + std::to_string(kMaxViewportSide) + " pixels per side, got " +
+                                 std::to_string(gridWidth) + "x" + std::to_string(gridHeight));
         if (originX < 0 || originY < 0 || originX > gridWidth - width || originY > gridHeight - height)
-            throw InputError("view", "the tile " + std::to_string(width) + "x" + std::to_string(height) + " at (" +
-                                         std::to_string(originX) + ", " + std::to_string(originY) +
-                                         ") does not lie inside its " + std::to_string(gridWidth) + "x" +
-                                         std::to_string(gridHeight) + " grid");
+            throw InputError("view",
+                             "the tile " + std::to_string(width) + "x" + std::to_string(height) + " at (" +
+                                 std::to_string(originX) + ", " + std::to_string(originY) +
+                                 ") does not lie inside its " + std::to_string(gridWidth) + "x" +
+                                 std::to_string(gridHeight) + " grid");
     } else if (originX != 0 || originY != 0) {
         throw InputError("view", "a view with an origin needs its grid (gridWidth, gridHeight)");
     }

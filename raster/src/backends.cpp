@@ -83,8 +83,8 @@ bool vulkanBackendAvailable(std::string* why, const VulkanBackendOptions&) {
 
 ViewportLimit::ViewportLimit(DepthBackend& inner, int side) : inner_(inner), side_(side) {
     if (side < 1 || side > kMaxViewportSide)
-        throw InputError("viewport limit", "a side of 1.." + std::to_string(kMaxViewportSide) + " pixels, got " +
-                                               std::to_string(side));
+        throw InputError("viewport limit",
+                         "a side of 1.." + std::to_string(kMaxViewportSide) + " pixels, got " + std::to_string(side));
 }
 
 std::string ViewportLimit::describe() const {
@@ -93,9 +93,9 @@ std::string ViewportLimit::describe() const {
 
 void ViewportLimit::setView(const OrthoView& view) {
     if (view.width > side_ || view.height > side_)
-        throw InputError("view", "a " + std::to_string(view.width) + "x" + std::to_string(view.height) +
-                                     " viewport is larger than this backend draws (" + std::to_string(side_) +
-                                     " px per side)");
+        throw InputError("view",
+                         "a " + std::to_string(view.width) + "x" + std::to_string(view.height) +
+                             " viewport is larger than this backend draws (" + std::to_string(side_) + " px per side)");
     tiles_ += view.tiled() ? 1 : 0;
     inner_.setView(view);
 }

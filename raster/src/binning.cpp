@@ -74,8 +74,7 @@ void makeEvents(const CommandList& list, const DepthFormat& format, const TileGr
                 tx1 = std::max<int>(tx1, t.tx1);
                 ty1 = std::max<int>(ty1, t.ty1);
             }
-            e.tiles =
-                tx1 < 0 ? kNoTiles : TileRect{uint16_t(tx0), uint16_t(ty0), uint16_t(tx1), uint16_t(ty1)};
+            e.tiles = tx1 < 0 ? kNoTiles : TileRect{uint16_t(tx0), uint16_t(ty0), uint16_t(tx1), uint16_t(ty1)};
             // Conservative setup only rejects: nothing is clipped, zero area is drawn.
             std::array<uint32_t, 3>& s = out.stats[k];
             for (uint32_t t = e.first; t < e.first + e.count; ++t) {

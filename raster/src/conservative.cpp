@@ -47,10 +47,8 @@ double positionsMagnitude(std::span<const Vec3f> positions) {
 WindowError windowError(const OrthoView& view, double m) {
     WindowError e;
     // A tile's window coordinates are the whole view's minus an integer (exact): the grid's error.
-    const double ax =
-        (2 * m + std::abs(view.xmin) + std::abs(view.xmax)) / (view.xmax - view.xmin) * view.fullWidth();
-    const double ay =
-        (2 * m + std::abs(view.ymin) + std::abs(view.ymax)) / (view.ymax - view.ymin) * view.fullHeight();
+    const double ax = (2 * m + std::abs(view.xmin) + std::abs(view.xmax)) / (view.xmax - view.xmin) * view.fullWidth();
+    const double ay = (2 * m + std::abs(view.ymin) + std::abs(view.ymax)) / (view.ymax - view.ymin) * view.fullHeight();
     e.xy = 8 * kU * std::max(ax, ay);
     e.z = 8 * kU * ((2 * m + std::abs(view.znear) + std::abs(view.zfar)) / (view.zfar - view.znear) + 1);
     return e;

@@ -173,8 +173,7 @@ void TraceWriter::beginFrame(uint32_t frame, std::span<const Vec3f> positions, s
     const bool sameTriangles = !lastTrianglesRef_.is_null() &&
         lastTrianglesRef_["shape"][0].get<size_t>() == triangles.size() &&
         scratchEquals(lastTrianglesRef_["offset"].get<uint64_t>(), triangles.data(), triangles.size_bytes());
-    if (!sameTriangles)
-        lastTrianglesRef_ = blob(triangles.data(), triangles.size_bytes(), "<u4", triangles.size(), 3);
+    if (!sameTriangles) lastTrianglesRef_ = blob(triangles.data(), triangles.size_bytes(), "<u4", triangles.size(), 3);
     frames_.push_back({{"frame", frame},
                        {"positions", std::move(positionsRef)},
                        {"triangles", lastTrianglesRef_},

@@ -135,9 +135,7 @@ public:
     void setView(const OrthoView& view) override;
     std::vector<uint64_t> execute(const CommandList& list) override;
     // The smaller of the two backends' limits: a larger view is drawn in tiles both can draw.
-    int maxViewportSide() const override {
-        return std::min(reference_.maxViewportSide(), other_.maxViewportSide());
-    }
+    int maxViewportSide() const override { return std::min(reference_.maxViewportSide(), other_.maxViewportSide()); }
     DepthImage readDepth() override;
     void readDepthInto(DepthImage& out) override;
 
