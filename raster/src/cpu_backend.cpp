@@ -301,6 +301,7 @@ private:
         s.inside = detail::insideClipVolume(window_[v], params_);
         s.x = s.inside ? int32_t(snapToFixed(w.x(), params_.subpixelBits)) : 0;
         s.y = s.inside ? int32_t(snapToFixed(w.y(), params_.subpixelBits)) : 0;
+        s.beyond = detail::beyondSides(window_[v], params_);
     }
 
     // Steps 3-7 (step 1 is execute's, step 2 updateWindow's).

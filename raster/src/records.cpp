@@ -195,40 +195,39 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     // volume trivialReject adds nothing: they are finite with depths in [0, 1], and three beyond
     // one side of the viewport snap to a box that holds no centre; so the count reads the snapped
     // vertices only, not the window ones (it was ~10% of a prune's time as a second gather).
-    // The count is exact for such a triangle, so it is kept for the setup as a hint (in the
-    // triangle's flags, which the setup then overwrites): kHintNone, no record (no area, or no
-    // centre in its box); kHintOne, one record, whose box is known to hold a centre.
-    enum : uint8_t { kHintNone, kHintOne, kHintClip };
+    // The count is exact for such a triangle, so what it found is kept for the setup (in the
+    // triangle's flags, which the setup then overwrites): kHintOne, one record, whose box is known
+    // to hold a centre; kHintClip, the clipping path; otherwise no record, and the flags are
+    // already the triangle's own (rejected, or zero area, or neither: no centre in its box), from
+    // the snapped vertices alone (setupUnclipped's verdict: trivialReject by the vertices' sides).
+    enum : uint8_t { kHintOne = 0x40, kHintClip = 0x80 };
+    static_assert(((kRejected | kClipped | kZeroArea) & (kHintOne | kHintClip)) == 0);
     std::vector<uint8_t>& hint = out.flags;  // sized by buildRecords before it counts
     auto countOne = [&](uint32_t t) -> uint32_t {
         const Triangle& tri = in.triangles[t];
         const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
         if (!(s0.inside && s1.inside && s2.inside)) return hint[t] = kHintClip, 1;
         const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
-        const bool one = snappedHasArea(sx, sy) && boxHoldsCentre(sx, sy, params);
-        hint[t] = one ? kHintOne : kHintNone;
-        return one ? 1 : 0;
+        const bool area = snappedHasArea(sx, sy);
+        if (area && boxHoldsCentre(sx, sy, params)) return hint[t] = kHintOne, 1;
+        hint[t] = (s0.beyond & s1.beyond & s2.beyond) != 0 ? kRejected : area ? 0 : kZeroArea;
+        return 0;
     };
     SetupParams keep = params;  // for a kHintOne triangle: its box holds a centre, no need to test it
     keep.dropEmpty = false;
     buildRecords<SubTriangles>(
         out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
+            const uint8_t h = hint[t];
+            if ((h & (kHintOne | kHintClip)) == 0) return h;  // no record: the flags are known
             SnappedTri* sub = scratch.sub;
             const Triangle& tri = in.triangles[t];
             int n = 0;
             uint8_t flags;
             const WinVertex &v0 = in.window[tri[0]], &v1 = in.window[tri[1]], &v2 = in.window[tri[2]];
             const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
-            const uint8_t h = hint[t];
-            if (h != kHintClip) {  // the common case: vertices snapped once
+            if (h == kHintOne) {  // area and a centre, so not rejected: one sub-triangle
                 const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
-                if (h == kHintNone) {
-                    // What setupUnclipped would say without making anything: rejected (then its
-                    // box holds no centre either), no area, or an area whose box holds no centre.
-                    flags = trivialReject(v0, v1, v2, params) ? kRejected : snappedHasArea(sx, sy) ? 0 : kZeroArea;
-                } else {  // area and a centre, so not rejected: one sub-triangle
-                    flags = setupUnclipped(v0, v1, v2, sx, sy, keep, sub, n);
-                }
+                flags = setupUnclipped(v0, v1, v2, sx, sy, keep, sub, n);
             } else {
                 flags = setupTriangle(v0, v1, v2, params, sub, n);
             }
