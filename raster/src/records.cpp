@@ -109,7 +109,8 @@ void relayoutSpilled(RecordSet<Rec>& set) {
 }
 
 // Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, emit)`
-// calls emit(record) for each record of triangle t and returns its TriFlags (`scratch`, a Scratch
+// calls emit(make) for each record of triangle t, make(record) filling it in place (and saying
+// whether to keep it), and returns its TriFlags (`scratch`, a Scratch
 // per task). Records go straight to their chunk's slot (records.h), sized by `countOne(t)`, a
 // cheap guess of triangle t's records: a guess too high leaves unused slots, one too low makes
 // the chunk spill; the records are the same either way. Then they are binned to tiles.
@@ -151,18 +152,23 @@ void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, c
             std::vector<Rec>& spill = set.spillRecords[ci];
             std::vector<TileRect>& spillTiles = set.spillTiles[ci];
             size_t n = 0;
-            auto emit = [&](const Rec& rec) {
-                if (n == cap && spill.empty()) {  // outgrew the slot: move to the side vector
+            // emit(make): make(record) fills a record and says whether to keep it. It writes in
+            // place in the slot (no copy of the record) while the slot has room.
+            auto emit = [&](auto&& make) {
+                if (n < cap && spill.empty()) {
+                    if (!make(recs[n])) return;
+                    tiles[n] = tileRectOf(recs[n], g);
+                    ++n;
+                    return;
+                }
+                Rec rec;
+                if (!make(rec)) return;
+                if (spill.empty()) {  // outgrew the slot: move to the side vector
                     spill.assign(recs, recs + n);
                     spillTiles.assign(tiles, tiles + n);
                 }
-                if (spill.empty()) {
-                    recs[n] = rec;
-                    tiles[n] = tileRectOf(rec, g);
-                } else {
-                    spill.push_back(rec);
-                    spillTiles.push_back(tileRectOf(rec, g));
-                }
+                spill.push_back(rec);
+                spillTiles.push_back(tileRectOf(rec, g));
                 ++n;
             };
             for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) {
@@ -231,10 +237,7 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
             } else {
                 flags = setupTriangle(v0, v1, v2, params, sub, n);
             }
-            for (int s = 0; s < n; ++s) {
-                EdgeTri e;
-                if (makeEdgeTri(sub[s], params, e)) emit(e);
-            }
+            for (int s = 0; s < n; ++s) emit([&](EdgeTri& e) { return makeEdgeTri(sub[s], params, e); });
             return flags;
         });
 }
@@ -246,12 +249,14 @@ void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const
     buildRecords<NoScratch>(
         out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, NoScratch&, auto&& emit) -> uint8_t {
             const Triangle& tri = in.triangles[t];
-            ConsRec rec;
-            if (!setupConservative(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]], in.params, err, rec.t))
-                return kRejected;
-            rec.e = consEdges(rec.t, in.params.subpixelBits);
-            emit(rec);
-            return 0;
+            bool kept = false;
+            emit([&](ConsRec& rec) {
+                kept =
+                    setupConservative(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]], in.params, err, rec.t);
+                if (kept) rec.e = consEdges(rec.t, in.params.subpixelBits);
+                return kept;
+            });
+            return kept ? uint8_t(0) : uint8_t(kRejected);
         });
 }
 
