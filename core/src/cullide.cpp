@@ -327,36 +327,53 @@ std::vector<TriangleRange> piecesOf(std::span<const TriangleRange> ranges) {
 }  // namespace
 
 namespace {
-OrthoView fitBox(OrthoView view, Vec3d lo, Vec3d hi);
-}  // namespace
 
-OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
-                  std::span<const TriangleRange> ranges, const Vec3d& dir, int width, int height,
-                  const DepthFormat& depth) {
+OrthoView fitBox(OrthoView view, Vec3d lo, Vec3d hi);
+
+// fitView's view before its box: the frame looking along dir, the viewport and depth format.
+OrthoView frameOf(const Vec3d& dir, int width, int height, const DepthFormat& depth) {
     OrthoView view = OrthoView::looking(dir);
     view.width = width;
     view.height = height;
     view.depth = depth;
-    // The bounds in the view's frame, per piece in parallel (levels 0-2 fit the whole mesh: 4-6%
-    // of a prune on one thread); min and max are exact, so the result is the same for any split.
+    return view;
+}
+
+// The bounds in `view`'s frame of the points that `each(i, f)` passes to f for block i of
+// `blocks`, per block in parallel; min and max are exact, so the result is the same for any split.
+template <typename Each>
+std::pair<Vec3d, Vec3d> projectedBounds(const OrthoView& view, size_t blocks, const Each& each) {
     constexpr double inf = std::numeric_limits<double>::infinity();
-    const std::vector<TriangleRange> pieces = piecesOf(ranges);
-    std::vector<std::pair<Vec3d, Vec3d>> bounds(pieces.size());
-    parallelFor(0, pieces.size(), 1, [&](const auto& block) {
+    std::vector<std::pair<Vec3d, Vec3d>> bounds(blocks);
+    parallelFor(0, blocks, 1, [&](const auto& block) {
         for (size_t i = block.begin(); i != block.end(); ++i) {
             Vec3d lo(inf, inf, inf), hi(-inf, -inf, -inf);
-            for (uint32_t t = pieces[i].first; t < pieces[i].first + pieces[i].count; ++t)
-                for (uint32_t v : triangles[t]) {
-                    const Vec3d p = positions[v].cast<double>();
-                    const Vec3d q(view.right.dot(p), view.up.dot(p), view.dir.dot(p));
-                    lo = lo.cwiseMin(q);
-                    hi = hi.cwiseMax(q);
-                }
+            each(i, [&](const Vec3f& point) {
+                const Vec3d p = point.cast<double>();
+                const Vec3d q(view.right.dot(p), view.up.dot(p), view.dir.dot(p));
+                lo = lo.cwiseMin(q);
+                hi = hi.cwiseMax(q);
+            });
             bounds[i] = {lo, hi};
         }
     });
     Vec3d lo(inf, inf, inf), hi(-inf, -inf, -inf);
     for (const auto& [l, h] : bounds) lo = lo.cwiseMin(l), hi = hi.cwiseMax(h);
+    return {lo, hi};
+}
+
+}  // namespace
+
+OrthoView fitView(std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                  std::span<const TriangleRange> ranges, const Vec3d& dir, int width, int height,
+                  const DepthFormat& depth) {
+    const OrthoView view = frameOf(dir, width, height, depth);
+    // Per piece in parallel (levels 0-2 fit the whole mesh: 4-6% of a prune on one thread).
+    const std::vector<TriangleRange> pieces = piecesOf(ranges);
+    const auto [lo, hi] = projectedBounds(view, pieces.size(), [&](size_t i, auto&& f) {
+        for (uint32_t t = pieces[i].first; t < pieces[i].first + pieces[i].count; ++t)
+            for (uint32_t v : triangles[t]) f(positions[v]);
+    });
     return fitBox(view, lo, hi);
 }
 
@@ -367,27 +384,11 @@ namespace {
 // triangle corner (a vertex is the corner of about six triangles).
 OrthoView fitViewToPoints(std::span<const Vec3f> positions, const Vec3d& dir, int width, int height,
                           const DepthFormat& depth) {
-    OrthoView view = OrthoView::looking(dir);
-    view.width = width;
-    view.height = height;
-    view.depth = depth;
-    constexpr double inf = std::numeric_limits<double>::infinity();
+    const OrthoView view = frameOf(dir, width, height, depth);
     constexpr size_t kBlock = 4096;
-    std::vector<std::pair<Vec3d, Vec3d>> bounds((positions.size() + kBlock - 1) / kBlock);
-    parallelFor(0, bounds.size(), 1, [&](const auto& block) {
-        for (size_t i = block.begin(); i != block.end(); ++i) {
-            Vec3d lo(inf, inf, inf), hi(-inf, -inf, -inf);
-            for (size_t v = i * kBlock; v < std::min(positions.size(), (i + 1) * kBlock); ++v) {
-                const Vec3d p = positions[v].cast<double>();
-                const Vec3d q(view.right.dot(p), view.up.dot(p), view.dir.dot(p));
-                lo = lo.cwiseMin(q);
-                hi = hi.cwiseMax(q);
-            }
-            bounds[i] = {lo, hi};
-        }
+    const auto [lo, hi] = projectedBounds(view, (positions.size() + kBlock - 1) / kBlock, [&](size_t i, auto&& f) {
+        for (size_t v = i * kBlock; v < std::min(positions.size(), (i + 1) * kBlock); ++v) f(positions[v]);
     });
-    Vec3d lo(inf, inf, inf), hi(-inf, -inf, -inf);
-    for (const auto& [l, h] : bounds) lo = lo.cwiseMin(l), hi = hi.cwiseMax(h);
     return fitBox(view, lo, hi);
 }
 
