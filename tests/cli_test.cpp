@@ -195,6 +195,8 @@ TEST(Cli, PruneRefusesBadOptions) {
         {"--threads -1", "--threads"},
         {"--frame 3", "--frame"},
         {"--backend metal", "--backend"},
+        {"--max-viewport 0", "--max-viewport"},
+        {"--max-viewport 20000", "--max-viewport"},
     };
     for (const auto& [args, needle] : cases) {
         const CliRun r = runCli("prune " + scene + " " + args);
@@ -308,6 +310,32 @@ TEST(Cli, ViewsInPruneJsonAndStudy) {
     EXPECT_NE(text.find(",views,"), std::string::npos) << text;
     EXPECT_NE(text.find(",fit,"), std::string::npos) << text;
     EXPECT_NE(text.find(",clustered,"), std::string::npos) << text;
+}
+
+// --max-viewport: the run drawn as on a backend with a smaller viewport limit. Traps: an option that
+// clamps the resolution instead of tiling (a different PCS), or tiles that are not recorded.
+TEST(Cli, PruneMaxViewportTilesWithTheSamePcs) {
+    const fs::path d = freshDir("max-viewport");
+    const std::string scene = quote(kData + "/scenes/two_cows_and_bunny.json");
+    std::string pcs[2];
+    size_t tiled = 0;
+    for (int limited : {0, 1}) {
+        const std::string json = (d / ("pcs" + std::to_string(limited) + ".json")).string();
+        const CliRun r = runCli("prune " + scene + " --resolution 600 --json " + quote(json) +
+                                (limited ? " --max-viewport 256" : ""));
+        ASSERT_EQ(r.status, 0) << r.output;
+        const auto j = nlohmann::json::parse(readAll(json));
+        pcs[limited] = j.at("frames").at(0).at("pcs").dump();
+        for (const auto& p : j.at("frames").at(0).at("passes")) {
+            EXPECT_EQ(p.at("width"), 600);
+            if (p.contains("tiles")) tiled += p.at("tiles").get<size_t>() > 1 ? 1 : 0;
+        }
+        if (limited) {
+            EXPECT_NE(r.output.find("at most 256 px per side"), std::string::npos) << r.output;
+        }
+    }
+    EXPECT_EQ(pcs[0], pcs[1]);
+    EXPECT_GT(tiled, 0u) << "no call records its tiles";
 }
 
 // Trap: prune gives a still scene up to the run (emptied once uploaded) when nothing reads it

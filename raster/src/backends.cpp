@@ -92,10 +92,11 @@ std::string ViewportLimit::describe() const {
 }
 
 void ViewportLimit::setView(const OrthoView& view) {
-    if (view.width > side_ || view.height > side_)
+    const int side = maxViewportSide();
+    if (view.width > side || view.height > side)
         throw InputError("view",
                          "a " + std::to_string(view.width) + "x" + std::to_string(view.height) +
-                             " viewport is larger than this backend draws (" + std::to_string(side_) + " px per side)");
+                             " viewport is larger than this backend draws (" + std::to_string(side) + " px per side)");
     tiles_ += view.tiled() ? 1 : 0;
     inner_.setView(view);
 }

@@ -31,6 +31,7 @@ struct PruneOptions {
     OptionText cullide;  // method, resolution, depth, directions, hierarchy (cullide/options.h)
     std::string backend = "cpu";
     int threads = 0;
+    int maxViewport = 0;  // > 0: draw as a backend with this largest viewport side would (tiles)
     long frame = -1;  // -1: every frame
     std::string json, out;
     std::string frames;  // folder for the Figure 12 pictures
@@ -51,7 +52,11 @@ void writePcsPly(const Scene& scene, const std::vector<PcsTriangle>& pcs, const 
 
 int runPrune(const PruneOptions& o) {
     const CullideOptions options = parseCullideOptions(o.cullide);
-    const std::unique_ptr<DepthBackend> backend = raster::makeBackend(o.backend, o.threads);
+    const std::unique_ptr<DepthBackend> made = raster::makeBackend(o.backend, o.threads);
+    // --max-viewport: the backend as one with that limit would look; larger calls are drawn in tiles.
+    std::unique_ptr<raster::ViewportLimit> limited;
+    if (o.maxViewport > 0) limited = std::make_unique<raster::ViewportLimit>(*made, o.maxViewport);
+    DepthBackend* const backend = limited ? static_cast<DepthBackend*>(limited.get()) : made.get();
 
     Animation animation = loadScene(o.scene);
     const auto [first, last] = selectFrames(animation, o.frame, o.scene);
@@ -136,8 +141,8 @@ int runPrune(const PruneOptions& o) {
         }
         // Given up to the run (emptied once uploaded) unless something below reads it.
         // (auto's exact-stage cost model calibrates on it during the run, after the upload.)
-        const bool sceneNeeded = o.check || o.exact || !o.out.empty() || pictures ||
-            options.exactSwitch.kind == ExactSwitchKind::Auto;
+        const bool sceneNeeded =
+            o.check || o.exact || !o.out.empty() || pictures || options.exactSwitch.kind == ExactSwitchKind::Auto;
         const CullideResult r = sceneNeeded ? runCullide(scene, *backend, frameOptions)
                                             : runCullide(std::move(scene), *backend, frameOptions);
         size_t rendered = 0, queries = 0;
@@ -252,6 +257,11 @@ void addPruneCommand(CLI::App& app, Action& action) {
         ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
     sub->add_option("--threads", o->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));
+    sub->add_option("--max-viewport", o->maxViewport,
+                    "Draw as a backend whose largest viewport side is N pixels: calls larger than that in tiles, "
+                    "the same PCS (1.." +
+                        std::to_string(kMaxViewportSide) + "; docs/cullide.md#adaptive-resolution)")
+        ->check(CLI::Range(1, kMaxViewportSide));
     sub->add_option("--frame", o->frame, "Prune only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
     sub->add_option("--json", o->json, "Write the PCS ([object, triangle] pairs), per-pass stats and times as JSON");
     sub->add_option("--out", o->out, "Write the frame as PLY with PCS triangles coloured green");

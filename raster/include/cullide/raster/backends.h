@@ -10,6 +10,7 @@
 #include "cullide/depth_backend.h"
 #include "cullide/raster/gpu_backend.h"
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,7 +42,8 @@ std::unique_ptr<GpuBackend> makeGpuBackend(const std::string& name);
 const std::vector<std::string>& gpuBackendNames();
 
 // Another backend as one that draws at most `side` pixels per side (1..kMaxViewportSide) would
-// look: maxViewportSide() says `side` and setView() refuses a larger view (InputError "view").
+// look: maxViewportSide() says `side` (or the inner backend's limit, if smaller) and setView()
+// refuses a larger view (InputError "view").
 // Everything else goes to `inner`, which must outlive it. Cullide then draws larger calls in tiles
 // (docs/cullide.md#adaptive-resolution): the tests and BM_Tiles run that on the CPU reference, as a
 // GPU with small limits would.
@@ -58,7 +60,7 @@ public:
     void setView(const OrthoView& view) override;
     std::vector<uint64_t> execute(const CommandList& commands) override { return inner_.execute(commands); }
     bool supportsConservative() const override { return inner_.supportsConservative(); }
-    int maxViewportSide() const override { return side_; }
+    int maxViewportSide() const override { return std::min(side_, inner_.maxViewportSide()); }
     DepthImage readDepth() override { return inner_.readDepth(); }
     void readDepthInto(DepthImage& out) override { inner_.readDepthInto(out); }
     uint64_t tilesSet() const { return tiles_; }  // views set that were tiles (OrthoView::tiled)
