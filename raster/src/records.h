@@ -25,11 +25,6 @@ struct SnapVertex {
     bool inside;
     uint8_t beyond;
 };
-enum : uint8_t { kBeyondLeft = 1, kBeyondRight = 2, kBeyondBottom = 4, kBeyondTop = 8 };
-inline uint8_t beyondSides(const WinVertex& v, const SetupParams& params) {
-    return uint8_t((v.x < 0 ? kBeyondLeft : 0) | (v.x > double(params.width) ? kBeyondRight : 0) |
-                   (v.y < 0 ? kBeyondBottom : 0) | (v.y > double(params.height) ? kBeyondTop : 0));
-}
 
 // Conservative mode (rules 10-13): a record and its fast-path edge functions.
 struct ConsRec {

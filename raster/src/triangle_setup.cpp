@@ -117,9 +117,7 @@ bool trivialReject(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2
     if (!finite(v0) || !finite(v1) || !finite(v2)) return true;
     // All three vertices beyond one side of the viewport or the depth range. Beyond x < 0 every
     // snapped x is <= 0, left of every centre (>= 1/2); likewise for the others.
-    const double W = params.width, H = params.height;
-    return (v0.x < 0 && v1.x < 0 && v2.x < 0) || (v0.x > W && v1.x > W && v2.x > W) ||
-        (v0.y < 0 && v1.y < 0 && v2.y < 0) || (v0.y > H && v1.y > H && v2.y > H) ||
+    return (beyondSides(v0, params) & beyondSides(v1, params) & beyondSides(v2, params)) != 0 ||
         (v0.z < 0 && v1.z < 0 && v2.z < 0) || (v0.z > 1 && v1.z > 1 && v2.z > 1);
 }
 

@@ -61,6 +61,13 @@ uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex&
 // setupTriangle(v) == kRejected if trivialReject(v); else, when every vertex is
 // insideClipVolume, setupUnclipped(v, snapped x, snapped y); else the clipping path.
 bool trivialReject(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params);
+// The sides of the viewport a vertex lies beyond (kBeyond*): trivialReject rejects three vertices
+// beyond one common side.
+enum : uint8_t { kBeyondLeft = 1, kBeyondRight = 2, kBeyondBottom = 4, kBeyondTop = 8 };
+inline uint8_t beyondSides(const WinVertex& v, const SetupParams& params) {
+    return uint8_t((v.x < 0 ? kBeyondLeft : 0) | (v.x > double(params.width) ? kBeyondRight : 0) |
+                   (v.y < 0 ? kBeyondBottom : 0) | (v.y > double(params.height) ? kBeyondTop : 0));
+}
 bool insideClipVolume(const WinVertex& v, const SetupParams& params);
 // Whether the snapped triangle has non-zero area (orientation), and whether its bounding box
 // holds a pixel centre of the viewport: the tests by which setup drops a sub-triangle.
