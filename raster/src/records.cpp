@@ -206,37 +206,36 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     // to hold a centre; kHintClip, the clipping path; otherwise no record, and the flags are
     // already the triangle's own (rejected, or zero area, or neither: no centre in its box), from
     // the snapped vertices alone (setupUnclipped's verdict: trivialReject by the vertices' sides).
-    enum : uint8_t { kHintOne = 0x40, kHintClip = 0x80 };
-    static_assert(((kRejected | kClipped | kZeroArea) & (kHintOne | kHintClip)) == 0);
+    // kHintCw goes with kHintOne: the snapped triangle is clockwise.
+    enum : uint8_t { kHintCw = 0x20, kHintOne = 0x40, kHintClip = 0x80 };
+    static_assert(((kRejected | kClipped | kZeroArea) & (kHintCw | kHintOne | kHintClip)) == 0);
     std::vector<uint8_t>& hint = out.flags;  // sized by buildRecords before it counts
     auto countOne = [&](uint32_t t) -> uint32_t {
         const Triangle& tri = in.triangles[t];
         const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
         if (!(s0.inside && s1.inside && s2.inside)) return hint[t] = kHintClip, 1;
         const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
-        const bool area = snappedHasArea(sx, sy);
-        if (area && boxHoldsCentre(sx, sy, params)) return hint[t] = kHintOne, 1;
+        const int64_t area2 = (sx[1] - sx[0]) * (sy[2] - sy[0]) - (sx[2] - sx[0]) * (sy[1] - sy[0]);
+        const bool area = area2 != 0;  // snappedHasArea
+        if (area && boxHoldsCentre(sx, sy, params)) return hint[t] = uint8_t(kHintOne | (area2 < 0 ? kHintCw : 0)), 1;
         hint[t] = (s0.beyond & s1.beyond & s2.beyond) != 0 ? kRejected : area ? 0 : kZeroArea;
         return 0;
     };
-    SetupParams keep = params;  // for a kHintOne triangle: its box holds a centre, no need to test it
-    keep.dropEmpty = false;
     buildRecords<SubTriangles>(
         out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
             const uint8_t h = hint[t];
             if ((h & (kHintOne | kHintClip)) == 0) return h;  // no record: the flags are known
-            SnappedTri* sub = scratch.sub;
             const Triangle& tri = in.triangles[t];
-            int n = 0;
-            uint8_t flags;
             const WinVertex &v0 = in.window[tri[0]], &v1 = in.window[tri[1]], &v2 = in.window[tri[2]];
-            const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
-            if (h == kHintOne) {  // area and a centre, so not rejected: one sub-triangle
+            if (h & kHintOne) {  // area and a centre, so not rejected: one record, flags 0
+                const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
                 const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
-                flags = setupUnclipped(v0, v1, v2, sx, sy, keep, sub, n);
-            } else {
-                flags = setupTriangle(v0, v1, v2, params, sub, n);
+                emit([&](EdgeTri& e) { return setupInsideEdgeTri(v0, v1, v2, sx, sy, h & kHintCw, params, e), true; });
+                return uint8_t(0);
             }
+            SnappedTri* sub = scratch.sub;
+            int n = 0;
+            const uint8_t flags = setupTriangle(v0, v1, v2, params, sub, n);
             for (int s = 0; s < n; ++s) emit([&](EdgeTri& e) { return makeEdgeTri(sub[s], params, e); });
             return flags;
         });

@@ -8,6 +8,7 @@
 #include "cullide/error.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 
@@ -73,6 +74,18 @@ bool planeFrom(const WinVertex& p0, const WinVertex& p1, const WinVertex& p2, De
 
 namespace {
 
+// The plane of a snapped sub-triangle (x, y; depths z) whose original triangle is collinear in
+// double but not after snapping. Rare: its ldexp is not paid per triangle.
+DepthPlane snappedPlane(const int64_t x[3], const int64_t y[3], const std::array<double, 3>& z,
+                        const SetupParams& params) {
+    const double unit = std::ldexp(1.0, -params.subpixelBits);
+    WinVertex s[3];
+    for (int v = 0; v < 3; ++v) s[v] = {double(x[v]) * unit, double(y[v]) * unit, z[v]};
+    DepthPlane plane;
+    if (!planeFrom(s[0], s[1], s[2], plane)) plane = DepthPlane{s[0].x, s[0].y, s[0].z, 0.0, 0.0};
+    return plane;
+}
+
 // Snapped sub-triangles of the polygon poly[0..n) (snapped coordinates sx, sy), fanned from vertex
 // 0, all carrying the depth plane of the original triangle (v0, v1, v2). Returns how many of the
 // fan's triangles have non-zero snapped area (before dropping empty ones).
@@ -98,15 +111,8 @@ int fanPolygon(const WinVertex* poly, int n, const int64_t* sx, const int64_t* s
             t.x[v] = sx[idx[v]];
             t.y[v] = sy[idx[v]];
         }
-        if (havePlane == 1) {
-            t.plane = plane;
-        } else {
-            // Collinear in double but not after snapping: the plane of the snapped sub-triangle.
-            const double unit = std::ldexp(1.0, -params.subpixelBits);  // rare: not paid per triangle
-            WinVertex s[3];
-            for (int v = 0; v < 3; ++v) s[v] = {double(t.x[v]) * unit, double(t.y[v]) * unit, poly[idx[v]].z};
-            if (!planeFrom(s[0], s[1], s[2], t.plane)) t.plane = DepthPlane{s[0].x, s[0].y, s[0].z, 0.0, 0.0};
-        }
+        if (havePlane == 1) t.plane = plane;
+        else t.plane = snappedPlane(t.x, t.y, {poly[idx[0]].z, poly[idx[1]].z, poly[idx[2]].z}, params);
     }
     return nonZero;
 }
@@ -237,6 +243,36 @@ bool makeEdgeTri(const SnappedTri& t, const SetupParams& params, EdgeTri& out) {
     }
     out.plane = t.plane;
     return true;
+}
+
+void setupInsideEdgeTri(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],
+                        const int64_t sy[3], bool clockwise, const SetupParams& params, EdgeTri& out) {
+    const int S = params.subpixelBits;
+    const int64_t half = int64_t(1) << (S - 1);
+    // fanPolygon's one sub-triangle: vertex 0 first, the other two swapped when clockwise.
+    const int64_t x[3] = {sx[0], clockwise ? sx[2] : sx[1], clockwise ? sx[1] : sx[2]};
+    const int64_t y[3] = {sy[0], clockwise ? sy[2] : sy[1], clockwise ? sy[1] : sy[2]};
+    // makeEdgeTri's box, known to hold a centre.
+    out.x0 = uint16_t(std::max<int64_t>(ceilShift(min3(x[0], x[1], x[2]) - half, S), 0));
+    out.x1 = uint16_t(std::min<int64_t>(floorShift(max3(x[0], x[1], x[2]) - half, S), params.width - 1));
+    out.y0 = uint16_t(std::max<int64_t>(ceilShift(min3(y[0], y[1], y[2]) - half, S), 0));
+    out.y1 = uint16_t(std::min<int64_t>(floorShift(max3(y[0], y[1], y[2]) - half, S), params.height - 1));
+    // makeEdgeTri's edges. Inside the clip volume |x|, |y| <= 2^kGuardBandFixedBits = 2^29, so the
+    // differences fit 32 bits without its check. The fill rule as arithmetic, not branches on the
+    // signs (which are data: mispredicted half the time).
+    const bool bottomLeft = params.fillRule == FillRule::BottomLeft;
+    for (int k = 0; k < 3; ++k) {
+        const int n = k == 2 ? 0 : k + 1;
+        const int64_t dx = x[n] - x[k], dy = y[n] - y[k];
+        const int64_t exclusive = int64_t(!(dy < 0) & !((dy == 0) & (bottomLeft ? dx > 0 : dx < 0)));
+        out.a[k] = int32_t(-dy);
+        out.b[k] = int32_t(dx);
+        out.c[k] = floorShift(dx * (half - y[k]) - dy * (half - x[k]) - exclusive, S);
+    }
+    if (!planeFrom(v0, v1, v2, out.plane)) {
+        const double z[3] = {v0.z, clockwise ? v2.z : v1.z, clockwise ? v1.z : v2.z};
+        out.plane = snappedPlane(x, y, {z[0], z[1], z[2]}, params);
+    }
 }
 
 }  // namespace cullide::raster::detail

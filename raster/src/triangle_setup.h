@@ -98,4 +98,11 @@ static_assert(sizeof(EdgeTri) == 96);
 // viewport.
 bool makeEdgeTri(const SnappedTri& t, const SetupParams& params, EdgeTri& out);
 
+// setupUnclipped and makeEdgeTri of its one sub-triangle, fused, for the fast path's common case: a
+// triangle whose vertices are all insideClipVolume, whose snapped area2 (the orientation
+// determinant of snappedHasArea) is non-zero, and whose box holds a pixel centre (boxHoldsCentre).
+// The same record, bit for bit, without the sub-triangle in between.
+void setupInsideEdgeTri(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],
+                        const int64_t sy[3], bool clockwise, const SetupParams& params, EdgeTri& out);
+
 }  // namespace cullide::raster::detail
