@@ -315,7 +315,7 @@ private:
 
     // Steps 3 and 4: records of the drawn triangles, binned to tiles.
     void setupRecords(const CommandList& list) {
-        const detail::SetupInput in{triangles_, window_, snapped_, params_, grid_};
+        const detail::SetupInput in{triangles_, window_, snapped_, params_, grid_, options_.simd};
         detail::setupDrawn(list, in, plain_);
         if (list.conservativeCount() > 0) detail::setupConservativeDrawn(list, in, consErr_, conservative_);
     }

@@ -108,15 +108,25 @@ void relayoutSpilled(RecordSet<Rec>& set) {
     }
 }
 
-// Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, emit)`
-// calls emit(make) for each record of triangle t, make(record) filling it in place (and saying
-// whether to keep it), and returns its TriFlags (`scratch`, a Scratch
-// per task). Records go straight to their chunk's slot (records.h), sized by `countOne(t)`, a
-// cheap guess of triangle t's records: a guess too high leaves unused slots, one too low makes
-// the chunk spill; the records are the same either way. Then they are binned to tiles.
-template <typename Scratch, typename Rec, typename CountOne, typename SetupOne>
+// Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, emit,
+// reserve)` calls emit(make) for each record of triangle t, make(record) filling it in place (and
+// saying whether to keep it), and returns its TriFlags (`scratch`, a Scratch per task). Records go
+// straight to their chunk's slot (records.h), sized by `countOne(t)`, a cheap guess of triangle
+// t's records: a guess too high leaves unused slots, one too low makes the chunk spill; the
+// records are the same either way. Then they are binned to tiles.
+// Deferred records, for setup in batches: reserve() hands out the next record and its tile
+// rectangle in the slot, to be filled later ({null, null} when the slot is full or spilled); every
+// reserved record must be filled before the next emit (which may move the slot's records) and
+// before `finishChunk(scratch)` returns, called at the end of each chunk.
+template <typename Rec>
+struct Reserved {
+    Rec* record;
+    TileRect* tiles;
+};
+
+template <typename Scratch, typename Rec, typename CountOne, typename SetupOne, typename FinishChunk>
 void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const CountOne& countOne,
-                  const SetupOne& setupOne) {
+                  const SetupOne& setupOne, const FinishChunk& finishChunk) {
     if (set.flags.size() < triangles) {
         set.flags.resize(triangles);
         set.begin.resize(triangles);
@@ -171,11 +181,16 @@ void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, c
                 spillTiles.push_back(tileRectOf(rec, g));
                 ++n;
             };
+            auto reserve = [&]() -> Reserved<Rec> {
+                if (n < cap && spill.empty()) return {recs + n, tiles + n++};
+                return {nullptr, nullptr};
+            };
             for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) {
                 set.begin[t] = uint32_t(slot + n);
-                set.flags[t] = setupOne(t, scratch, emit);
+                set.flags[t] = setupOne(t, scratch, emit, reserve);
                 set.end[t] = uint32_t(slot + n);
             }
+            finishChunk(scratch);
             if (spill.empty()) std::fill(tiles + n, tiles + cap, kNoTiles);
             else anySpilled.store(true, std::memory_order_relaxed);
             set.used[ci] = uint32_t(n);
@@ -185,8 +200,14 @@ void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, c
     binToTiles(set.tiles, grid, set.counts, set.bins);
 }
 
+// setupDrawn's scratch: the sub-triangles of a clipped triangle, and up to four one-record
+// triangles waiting for setupInsideEdgeTri4 in their reserved records.
 struct SubTriangles {
     SnappedTri sub[kMaxSubTriangles];
+    InsideBatch batch;
+    EdgeTri* records[4];
+    TileRect* tiles[4];
+    int pending = 0;
 };
 struct NoScratch {};
 
@@ -221,24 +242,70 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
         hint[t] = (s0.beyond & s1.beyond & s2.beyond) != 0 ? kRejected : area ? 0 : kZeroArea;
         return 0;
     };
+    // One-record triangles are set up four at a time where the CPU allows (the records are the
+    // same either way): each reserves its record, and a full batch fills all four.
+    const bool batched = in.simd && haveInsideEdgeTri4();
+    const TileGrid& grid = in.grid;
+    auto flush = [&](SubTriangles& scratch) {
+        if (scratch.pending == 0) return;
+        InsideBatch& b = scratch.batch;
+        if (scratch.pending == 4) {
+            setupInsideEdgeTri4(b, params, scratch.records);
+        } else {
+            for (int l = 0; l < scratch.pending; ++l) {
+                const WinVertex v[3] = {{b.x[0][l], b.y[0][l], b.z[0][l]},
+                                        {b.x[1][l], b.y[1][l], b.z[1][l]},
+                                        {b.x[2][l], b.y[2][l], b.z[2][l]}};
+                const int64_t sx[3] = {b.sx[0][l], b.sx[1][l], b.sx[2][l]};
+                const int64_t sy[3] = {b.sy[0][l], b.sy[1][l], b.sy[2][l]};
+                setupInsideEdgeTri(v[0], v[1], v[2], sx, sy, b.clockwise[l] != 0, params, *scratch.records[l]);
+            }
+        }
+        for (int l = 0; l < scratch.pending; ++l) *scratch.tiles[l] = tileRectOf(*scratch.records[l], grid);
+        scratch.pending = 0;
+    };
     buildRecords<SubTriangles>(
-        out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, SubTriangles& scratch, auto&& emit) {
+        out, in.triangles.size(), in.grid, countOne,
+        [&](uint32_t t, SubTriangles& scratch, auto&& emit, auto&& reserve) {
             const uint8_t h = hint[t];
             if ((h & (kHintOne | kHintClip)) == 0) return h;  // no record: the flags are known
             const Triangle& tri = in.triangles[t];
             const WinVertex &v0 = in.window[tri[0]], &v1 = in.window[tri[1]], &v2 = in.window[tri[2]];
             if (h & kHintOne) {  // area and a centre, so not rejected: one record, flags 0
                 const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
+                if (batched) {
+                    if (const Reserved<EdgeTri> r = reserve(); r.record) {
+                        const int l = scratch.pending++;
+                        InsideBatch& b = scratch.batch;
+                        const WinVertex* v[3] = {&v0, &v1, &v2};
+                        const SnapVertex* sv[3] = {&s0, &s1, &s2};
+                        for (int k = 0; k < 3; ++k) {
+                            b.x[k][l] = v[k]->x;
+                            b.y[k][l] = v[k]->y;
+                            b.z[k][l] = v[k]->z;
+                            b.sx[k][l] = sv[k]->x;
+                            b.sy[k][l] = sv[k]->y;
+                        }
+                        b.clockwise[l] = h & kHintCw ? -1 : 0;
+                        scratch.records[l] = r.record;
+                        scratch.tiles[l] = r.tiles;
+                        if (scratch.pending == 4) flush(scratch);
+                        return uint8_t(0);
+                    }
+                    flush(scratch);  // the slot is full: the records waiting go in before emit moves them
+                }
                 const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
                 emit([&](EdgeTri& e) { return setupInsideEdgeTri(v0, v1, v2, sx, sy, h & kHintCw, params, e), true; });
                 return uint8_t(0);
             }
+            flush(scratch);  // before emit may move the slot's records
             SnappedTri* sub = scratch.sub;
             int n = 0;
             const uint8_t flags = setupTriangle(v0, v1, v2, params, sub, n);
             for (int s = 0; s < n; ++s) emit([&](EdgeTri& e) { return makeEdgeTri(sub[s], params, e); });
             return flags;
-        });
+        },
+        flush);
 }
 
 void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const WindowError& err,
@@ -246,7 +313,8 @@ void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const
     drawnChunks(list, Command::Op::DrawConservative, out);
     auto countOne = [](uint32_t) -> uint32_t { return 1; };
     buildRecords<NoScratch>(
-        out, in.triangles.size(), in.grid, countOne, [&](uint32_t t, NoScratch&, auto&& emit) -> uint8_t {
+        out, in.triangles.size(), in.grid, countOne,
+        [&](uint32_t t, NoScratch&, auto&& emit, auto&&) -> uint8_t {
             const Triangle& tri = in.triangles[t];
             bool kept = false;
             emit([&](ConsRec& rec) {
@@ -256,7 +324,8 @@ void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const
                 return kept;
             });
             return kept ? uint8_t(0) : uint8_t(kRejected);
-        });
+        },
+        [](NoScratch&) {});
 }
 
 }  // namespace cullide::raster::detail

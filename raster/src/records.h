@@ -71,6 +71,7 @@ struct SetupInput {
     std::span<const SnapVertex> snapped;
     const SetupParams& params;
     const TileGrid& grid;
+    bool simd = true;  // set up four triangles at a time with AVX2 where the CPU has it
 };
 
 // Sets up the union of the ranges drawn by `list`'s Draw commands, once per triangle (clip, snap,

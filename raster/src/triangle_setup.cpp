@@ -12,6 +12,10 @@
 #include <cmath>
 #include <cstdlib>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 namespace cullide::raster::detail {
 
 namespace {
@@ -274,5 +278,124 @@ void setupInsideEdgeTri(const WinVertex& v0, const WinVertex& v1, const WinVerte
         out.plane = snappedPlane(x, y, {z[0], z[1], z[2]}, params);
     }
 }
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+
+bool haveInsideEdgeTri4() {
+    return __builtin_cpu_supports("avx2");
+}
+
+namespace {
+
+// floor(v / 2^s) on four int64 lanes (AVX2 has no 64-bit arithmetic shift): the logical shift,
+// with the sign's s high ones put back (`rest` = 64 - s).
+__attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s, __m128i rest) {
+    const __m256i negative = _mm256_cmpgt_epi64(_mm256_setzero_si256(), v);
+    return _mm256_or_si256(_mm256_srl_epi64(v, s), _mm256_sll_epi64(negative, rest));
+}
+
+}  // namespace
+
+__attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, const SetupParams& params,
+                                                         EdgeTri* const out[4]) {
+    const int S = params.subpixelBits;
+    const __m128i s = _mm_cvtsi32_si128(S), rest = _mm_cvtsi32_si128(64 - S);
+    const __m128i zero = _mm_setzero_si128(), half = _mm_set1_epi32(1 << (S - 1));
+    const auto load = [](const int32_t* p) { return _mm_load_si128(reinterpret_cast<const __m128i*>(p)); };
+    // The sub-triangle's vertices: 0, then 1 and 2 swapped in the clockwise lanes.
+    const __m128i cw = load(b.clockwise);
+    const __m128i x[3] = {load(b.sx[0]), _mm_blendv_epi8(load(b.sx[1]), load(b.sx[2]), cw),
+                          _mm_blendv_epi8(load(b.sx[2]), load(b.sx[1]), cw)};
+    const __m128i y[3] = {load(b.sy[0]), _mm_blendv_epi8(load(b.sy[1]), load(b.sy[2]), cw),
+                          _mm_blendv_epi8(load(b.sy[2]), load(b.sy[1]), cw)};
+    // The box (32 bits suffice: |coordinate| <= 2^29), as makeEdgeTri: ceilShift(m - half) is
+    // -((half - m) >> S).
+    const __m128i minx = _mm_min_epi32(_mm_min_epi32(x[0], x[1]), x[2]);
+    const __m128i maxx = _mm_max_epi32(_mm_max_epi32(x[0], x[1]), x[2]);
+    const __m128i miny = _mm_min_epi32(_mm_min_epi32(y[0], y[1]), y[2]);
+    const __m128i maxy = _mm_max_epi32(_mm_max_epi32(y[0], y[1]), y[2]);
+    alignas(16) int32_t box[4][4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[0]),
+                    _mm_max_epi32(_mm_sub_epi32(zero, _mm_sra_epi32(_mm_sub_epi32(half, minx), s)), zero));
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[1]),
+                    _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxx, half), s), _mm_set1_epi32(params.width - 1)));
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[2]),
+                    _mm_max_epi32(_mm_sub_epi32(zero, _mm_sra_epi32(_mm_sub_epi32(half, miny), s)), zero));
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[3]),
+                    _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxy, half), s), _mm_set1_epi32(params.height - 1)));
+    // The edges, as makeEdgeTri; the products in 64 bits (_mm256_mul_epi32 multiplies the low 32
+    // bits of each lane, signed: every factor fits them).
+    const bool bottomLeft = params.fillRule == FillRule::BottomLeft;
+    alignas(16) int32_t ea[3][4], eb[3][4];
+    alignas(32) int64_t ec[3][4];
+    for (int k = 0; k < 3; ++k) {
+        const int n = k == 2 ? 0 : k + 1;
+        const __m128i dx = _mm_sub_epi32(x[n], x[k]), dy = _mm_sub_epi32(y[n], y[k]);
+        const __m128i along = bottomLeft ? _mm_cmpgt_epi32(dx, zero) : _mm_cmpgt_epi32(zero, dx);
+        const __m128i inclusive =
+            _mm_or_si128(_mm_cmpgt_epi32(zero, dy), _mm_and_si128(_mm_cmpeq_epi32(dy, zero), along));
+        const __m128i exclusive = _mm_andnot_si128(inclusive, _mm_set1_epi32(1));
+        const __m256i p = _mm256_mul_epi32(_mm256_cvtepi32_epi64(dx), _mm256_cvtepi32_epi64(_mm_sub_epi32(half, y[k])));
+        const __m256i q = _mm256_mul_epi32(_mm256_cvtepi32_epi64(dy), _mm256_cvtepi32_epi64(_mm_sub_epi32(half, x[k])));
+        const __m256i c = _mm256_sub_epi64(_mm256_sub_epi64(p, q), _mm256_cvtepi32_epi64(exclusive));
+        _mm_store_si128(reinterpret_cast<__m128i*>(ea[k]), _mm_sub_epi32(zero, dy));
+        _mm_store_si128(reinterpret_cast<__m128i*>(eb[k]), dx);
+        _mm256_store_si256(reinterpret_cast<__m256i*>(ec[k]), floorShift4(c, s, rest));
+    }
+    // The depth plane, as planeFrom, in the triangle's own vertex order.
+    const __m256d x0 = _mm256_load_pd(b.x[0]), y0 = _mm256_load_pd(b.y[0]), z0 = _mm256_load_pd(b.z[0]);
+    const __m256d x1 = _mm256_sub_pd(_mm256_load_pd(b.x[1]), x0), y1 = _mm256_sub_pd(_mm256_load_pd(b.y[1]), y0);
+    const __m256d z1 = _mm256_sub_pd(_mm256_load_pd(b.z[1]), z0);
+    const __m256d x2 = _mm256_sub_pd(_mm256_load_pd(b.x[2]), x0), y2 = _mm256_sub_pd(_mm256_load_pd(b.y[2]), y0);
+    const __m256d z2 = _mm256_sub_pd(_mm256_load_pd(b.z[2]), z0);
+    const __m256d det = _mm256_sub_pd(_mm256_mul_pd(x1, y2), _mm256_mul_pd(x2, y1));
+    const __m256d dzdx = _mm256_div_pd(_mm256_sub_pd(_mm256_mul_pd(z1, y2), _mm256_mul_pd(z2, y1)), det);
+    const __m256d dzdy = _mm256_div_pd(_mm256_sub_pd(_mm256_mul_pd(x1, z2), _mm256_mul_pd(x2, z1)), det);
+    // planeFrom fails on a zero or non-finite det or gradient (|v| < inf is false for NaN too).
+    const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+    const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));
+    const __m256d finiteDet = _mm256_cmp_pd(_mm256_and_pd(det, absMask), inf, _CMP_LT_OQ);
+    const __m256d finiteX = _mm256_cmp_pd(_mm256_and_pd(dzdx, absMask), inf, _CMP_LT_OQ);
+    const __m256d finiteY = _mm256_cmp_pd(_mm256_and_pd(dzdy, absMask), inf, _CMP_LT_OQ);
+    const __m256d ok = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(det, _mm256_setzero_pd(), _CMP_NEQ_OQ), finiteDet),
+                                     _mm256_and_pd(finiteX, finiteY));
+    const int planeOk = _mm256_movemask_pd(ok);
+    alignas(32) double gx[4], gy[4];
+    _mm256_store_pd(gx, dzdx);
+    _mm256_store_pd(gy, dzdy);
+    for (int l = 0; l < 4; ++l) {
+        EdgeTri& e = *out[l];
+        if (!(planeOk >> l & 1)) {
+            const WinVertex v[3] = {{b.x[0][l], b.y[0][l], b.z[0][l]},
+                                    {b.x[1][l], b.y[1][l], b.z[1][l]},
+                                    {b.x[2][l], b.y[2][l], b.z[2][l]}};
+            const int64_t sx[3] = {b.sx[0][l], b.sx[1][l], b.sx[2][l]}, sy[3] = {b.sy[0][l], b.sy[1][l], b.sy[2][l]};
+            setupInsideEdgeTri(v[0], v[1], v[2], sx, sy, b.clockwise[l] != 0, params, e);
+            continue;
+        }
+        for (int k = 0; k < 3; ++k) {
+            e.c[k] = ec[k][l];
+            e.a[k] = ea[k][l];
+            e.b[k] = eb[k][l];
+        }
+        e.x0 = uint16_t(box[0][l]);
+        e.x1 = uint16_t(box[1][l]);
+        e.y0 = uint16_t(box[2][l]);
+        e.y1 = uint16_t(box[3][l]);
+        e.plane = DepthPlane{b.x[0][l], b.y[0][l], b.z[0][l], gx[l], gy[l]};
+    }
+}
+
+#else
+
+bool haveInsideEdgeTri4() {
+    return false;
+}
+
+void setupInsideEdgeTri4(const InsideBatch&, const SetupParams&, EdgeTri* const[4]) {
+    CULLIDE_CHECK(false, "setupInsideEdgeTri4 without AVX2");
+}
+
+#endif
 
 }  // namespace cullide::raster::detail

@@ -105,4 +105,19 @@ bool makeEdgeTri(const SnappedTri& t, const SetupParams& params, EdgeTri& out);
 void setupInsideEdgeTri(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],
                         const int64_t sy[3], bool clockwise, const SetupParams& params, EdgeTri& out);
 
+// Four such triangles side by side (lane l of each array), for setupInsideEdgeTri4.
+struct InsideBatch {
+    alignas(32) double x[3][4], y[3][4], z[3][4];  // window coordinates of vertex k
+    alignas(16) int32_t sx[3][4], sy[3][4];  // snapped coordinates of vertex k
+    alignas(16) int32_t clockwise[4];  // -1 when clockwise, else 0
+};
+
+// Whether setupInsideEdgeTri4 runs on this CPU (AVX2).
+bool haveInsideEdgeTri4();
+
+// setupInsideEdgeTri on the four triangles of `batch` at once with AVX2 (haveInsideEdgeTri4()):
+// the same integer and double operations in the same order (no FMA), so the same four records
+// bit for bit. A lane whose depth plane needs planeFrom's fallback is set up by the scalar step.
+void setupInsideEdgeTri4(const InsideBatch& batch, const SetupParams& params, EdgeTri* const out[4]);
+
 }  // namespace cullide::raster::detail

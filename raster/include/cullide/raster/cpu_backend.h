@@ -37,7 +37,7 @@ struct CpuBackendOptions {
     int threads = 0;  // 0: oneTBB's default; else a task_arena of this size
     int tileSize = kDefaultTileSize;  // fast path tile edge in pixels, 8..1024
     bool scalarReference = false;  // use the scalar reference path instead
-    bool simd = true;  // fast path: AVX2 pixel loop where the CPU has it
+    bool simd = true;  // fast path: AVX2 pixel loop and triangle setup where the CPU has it
                        // (the same results bit for bit; false: scalar)
 };
 
