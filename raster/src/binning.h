@@ -33,12 +33,26 @@ inline constexpr TileRect kNoTiles{1, 1, 0, 0};
 // The viewport's tiles, row-major.
 struct TileGrid {
     int tilesX = 0, tilesY = 0, tileSize = 64;
+    // x / tileSize as (x * reciprocal) >> 32, for every pixel index x < 2^14 (viewports are at most
+    // 16384 wide): reciprocal = floor(2^32 / d) + 1 overshoots x / d by x * (< 1) / 2^32 < 2^-18,
+    // less than the 1/d (>= 2^-10) that separates x / d from the next integer. Setup bins every
+    // record by four of these; integer division was a visible part of it.
+    uint64_t reciprocal = (uint64_t(1) << 32) / 64 + 1;
+
+    static TileGrid make(int width, int height, int tileSize) {
+        TileGrid g;
+        g.tileSize = tileSize;
+        g.tilesX = (width + tileSize - 1) / tileSize;
+        g.tilesY = (height + tileSize - 1) / tileSize;
+        g.reciprocal = (uint64_t(1) << 32) / uint64_t(tileSize) + 1;
+        return g;
+    }
     size_t count() const { return size_t(tilesX) * size_t(tilesY); }
     size_t index(int tx, int ty) const { return size_t(ty) * size_t(tilesX) + size_t(tx); }
+    uint16_t tileOf(int x) const { return uint16_t((uint64_t(x) * reciprocal) >> 32); }
     // The tiles of a pixel rectangle (inclusive bounds inside the viewport).
     TileRect of(int x0, int y0, int x1, int y1) const {
-        return TileRect{uint16_t(x0 / tileSize), uint16_t(y0 / tileSize), uint16_t(x1 / tileSize),
-                        uint16_t(y1 / tileSize)};
+        return TileRect{tileOf(x0), tileOf(y0), tileOf(x1), tileOf(y1)};
     }
     // Calls visit(tile) for each tile of `r`, row by row.
     template <typename Visit>

@@ -171,9 +171,7 @@ public:
             }
             depth_.resize(n);
             depthPending_ = true;
-            grid_.tileSize = options_.tileSize;
-            grid_.tilesX = (view.width + options_.tileSize - 1) / options_.tileSize;
-            grid_.tilesY = (view.height + options_.tileSize - 1) / options_.tileSize;
+            grid_ = detail::TileGrid::make(view.width, view.height, options_.tileSize);
             // resize, not assign: the tiles kept keep their scratch (runTile resets each one), so
             // that a run whose viewport changes per call (adaptive resolution) does not regrow it.
             tileOut_.resize(grid_.count());
