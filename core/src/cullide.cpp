@@ -711,15 +711,41 @@ private:
         lent_ = backend_.borrowGeometry(positions_, triangles_);
     }
 
-    // The triangles of the given nodes, as (object, triangle) sorted.
+    // The triangles of the given nodes (disjoint), as (object, triangle) sorted. Where many of an
+    // object's triangles are asked for (onPass after the first levels: most of the mesh), they are
+    // marked and read back in order, linear in the object's size; a few are sorted.
     std::vector<PcsTriangle> expand(const std::vector<Item>& items) const {
+        const size_t objects = hierarchies_.size();
+        std::vector<size_t> start(objects + 1, 0), triangles(objects, 0);  // items by object (counting sort)
+        for (const Item& it : items) ++start[it.object + 1], triangles[it.object] += node(it).count;
+        std::partial_sum(start.begin(), start.end(), start.begin());
+        std::vector<uint32_t> byObject(items.size());
+        std::vector<size_t> fill(start.begin(), start.end() - 1);
+        for (uint32_t i = 0; i < items.size(); ++i) byObject[fill[items[i].object]++] = i;
+
         std::vector<PcsTriangle> out;
-        for (const Item& it : items) {
-            const Hierarchy& h = *hierarchies_[it.object];
-            const HierarchyNode& n = node(it);
-            for (uint32_t k = n.first; k < n.first + n.count; ++k) out.push_back({it.object, h.order[k]});
+        out.reserve(std::accumulate(triangles.begin(), triangles.end(), size_t(0)));
+        std::vector<uint8_t> marks;
+        for (uint32_t o = 0; o < objects; ++o) {
+            if (triangles[o] == 0) continue;
+            const std::vector<uint32_t>& order = hierarchies_[o]->order;
+            const bool dense = triangles[o] * 8 >= order.size();
+            const size_t from = out.size();
+            if (dense) marks.assign(order.size(), 0);
+            for (size_t b = start[o]; b < start[o + 1]; ++b) {
+                const HierarchyNode& n = node(items[byObject[b]]);
+                for (uint32_t k = n.first; k < n.first + n.count; ++k) {
+                    if (dense) marks[order[k]] = 1;
+                    else out.push_back({o, order[k]});
+                }
+            }
+            if (dense) {
+                for (uint32_t t = 0; t < marks.size(); ++t)
+                    if (marks[t]) out.push_back({o, t});
+            } else {
+                std::sort(out.begin() + ptrdiff_t(from), out.end());
+            }
         }
-        std::sort(out.begin(), out.end());
         return out;
     }
 
