@@ -8,6 +8,8 @@
 
 #include "cullide/error.h"
 #include "cullide/oracle/oracle.h"
+#include "cullide/raster/cpu_backend.h"
+#include "cullide/raster/rules.h"
 
 #include <gtest/gtest.h>
 
@@ -17,6 +19,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <set>
 
 namespace {
@@ -162,6 +165,85 @@ TEST(Study, ResumeSkipsDoneRunsAndHealsACutLine) {
                                                     << recs[2].dump() << "\n";
     EXPECT_EQ(runStudy(o), 1u);
     EXPECT_EQ(readRecords(dir / "r.jsonl").size(), 4u);
+}
+
+// samplePair's measures the way it took them before it drew a tile: each triangle alone over the
+// whole view, every pixel read (the plane depths from the unsnapped window corners).
+PairSample wholeViewSample(DepthBackend& backend, const std::array<Vec3f, 3>& t, const std::array<Vec3f, 3>& x,
+                           const OrthoView& view) {
+    const std::array<Vec3f, 6> positions{t[0], t[1], t[2], x[0], x[1], x[2]};
+    const std::array<Triangle, 2> triangles{Triangle{0, 1, 2}, Triangle{3, 4, 5}};
+    backend.setGeometry(positions, triangles);
+    backend.setView(view);
+    DepthImage img[2];
+    for (uint32_t k = 0; k < 2; ++k) {
+        CommandList list;
+        list.clear(1.0);
+        list.depthFunc(DepthFunc::Always);
+        list.draw(k, 1);
+        backend.execute(list);
+        img[k] = backend.readDepth();
+    }
+    const uint32_t cleared = raster::encodeDepth(1.0, view.depth);
+    auto plane = [&](const std::array<Vec3f, 3>& c, double px, double py) {  // depth at (px, py)
+        const Vec3d w[3] = {view.toWindow(c[0]), view.toWindow(c[1]), view.toWindow(c[2])};
+        const double ux = w[1].x() - w[0].x(), uy = w[1].y() - w[0].y(), uz = w[1].z() - w[0].z();
+        const double vx = w[2].x() - w[0].x(), vy = w[2].y() - w[0].y(), vz = w[2].z() - w[0].z();
+        const double det = ux * vy - uy * vx;
+        return w[0].z() + (uz * vy - uy * vz) / det * (px - w[0].x()) + (ux * vz - uz * vx) / det * (py - w[0].y());
+    };
+    PairSample s;
+    s.maxDiffSteps = -std::numeric_limits<double>::infinity();
+    for (int yy = 0; yy < view.height; ++yy)
+        for (int xx = 0; xx < view.width; ++xx) {
+            const uint32_t a = img[0].at(xx, yy), b = img[1].at(xx, yy);
+            s.coveredT += a != cleared, s.coveredX += b != cleared;
+            if (a == cleared || b == cleared) continue;
+            ++s.shared;
+            s.maxStoredDiff = std::max(s.maxStoredDiff, int64_t(a) - int64_t(b));
+            s.maxDiffSteps =
+                std::max(s.maxDiffSteps,
+                         (plane(t, xx + 0.5, yy + 0.5) - plane(x, xx + 0.5, yy + 0.5)) / view.depth.resolution());
+        }
+    return s;
+}
+
+// Trap: samplePair draws only a tile of the view around the two triangles. A box a pixel too
+// tight would lose the fragments on its border, a pixel centre without the tile's origin would
+// misplace the plane depths. Small random pairs (a few pixels, crossing each other in depth), some
+// across the view's border, some off it, in a view whose pixels are not powers of two: the same
+// counts and depths as the whole view drawn and read.
+TEST(StudyCauses, SamplePairSeesTheWholeViewsFragments) {
+    auto backend = raster::makeCpuBackend({});
+    OrthoView view;
+    view.xmin = -1.3, view.xmax = 2.1, view.ymin = -0.7, view.ymax = 1.9, view.znear = -1, view.zfar = 1;
+    view.width = 37, view.height = 29;
+    view.depth = DepthFormat::unorm(16);
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<float> where(-1.5f, 2.3f), offset(-0.3f, 0.3f), depth(-0.5f, 0.5f);
+    PairSampleScratch scratch;
+    size_t shared = 0, border = 0;
+    for (int pair = 0; pair < 300; ++pair) {
+        const Vec3f c(where(rng), where(rng) * 0.7f, 0.0f);
+        std::array<Vec3f, 3> t, x;
+        for (int k = 0; k < 3; ++k) {
+            t[size_t(k)] = c + Vec3f(offset(rng), offset(rng), depth(rng));
+            x[size_t(k)] = c + Vec3f(offset(rng), offset(rng), depth(rng));
+        }
+        const PairSample got = samplePair(*backend, t, x, view, scratch);
+        const PairSample want = wholeViewSample(*backend, t, x, view);
+        EXPECT_EQ(got.coveredT, want.coveredT) << pair;
+        EXPECT_EQ(got.coveredX, want.coveredX) << pair;
+        EXPECT_EQ(got.shared, want.shared) << pair;
+        EXPECT_EQ(got.maxStoredDiff, want.maxStoredDiff) << pair;
+        if (want.shared > 0) {
+            EXPECT_NEAR(got.maxDiffSteps, want.maxDiffSteps, 1e-6) << pair;
+        }
+        shared += want.shared > 0;
+        border += (c.x() < view.xmin + 0.3f || c.x() > view.xmax - 0.3f) && want.coveredT > 0;
+    }
+    EXPECT_GT(shared, 50u);  // the pairs overlap often enough to test the depths
+    EXPECT_GT(border, 5u);  // and some lie across the view's border
 }
 
 // Trap: the thresholds differ by method (GREATER needs one stored step, GEQUAL none); a rule that
