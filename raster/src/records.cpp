@@ -8,6 +8,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
+#include <cstddef>
+#include <cstring>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace cullide::raster::detail {
 
@@ -111,7 +118,7 @@ void relayoutSpilled(RecordSet<Rec>& set) {
 // Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, emit,
 // reserve)` calls emit(make) for each record of triangle t, make(record) filling it in place (and
 // saying whether to keep it), and returns its TriFlags (`scratch`, a Scratch per task). Records go
-// straight to their chunk's slot (records.h), sized by `countOne(t)`, a cheap guess of triangle
+// straight to their chunk's slot (records.h), sized by `countRange(lo, hi)`, the sum of a cheap guess of triangle
 // t's records: a guess too high leaves unused slots, one too low makes the chunk spill; the
 // records are the same either way. Then they are binned to tiles.
 // Deferred records, for setup in batches: reserve() hands out the next record and its tile
@@ -125,7 +132,7 @@ struct Reserved {
 };
 
 template <typename Scratch, typename Rec, typename CountOne, typename SetupOne, typename FinishChunk>
-void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const CountOne& countOne,
+void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const CountOne& countRange,
                   const SetupOne& setupOne, const FinishChunk& finishChunk) {
     if (set.flags.size() < triangles) {
         set.flags.resize(triangles);
@@ -137,9 +144,7 @@ void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, c
     set.slotStart[0] = 0;
     parallelFor(0, chunks.size(), 1, [&](const tbb::blocked_range<size_t>& r) {
         for (size_t ci = r.begin(); ci != r.end(); ++ci) {
-            size_t n = 0;
-            for (uint32_t t = chunks[ci][0]; t < chunks[ci][1]; ++t) n += countOne(t);
-            set.slotStart[ci + 1] = n;
+            set.slotStart[ci + 1] = countRange(chunks[ci][0], chunks[ci][1]);
         }
     });
     for (size_t ci = 0; ci < chunks.size(); ++ci) set.slotStart[ci + 1] += set.slotStart[ci];
@@ -211,6 +216,88 @@ struct SubTriangles {
 };
 struct NoScratch {};
 
+// setupDrawn's count pass keeps its verdict in a triangle's flags (see there). kHintCw goes with
+// kHintOne: the snapped triangle is clockwise.
+enum : uint8_t { kHintCw = 0x20, kHintOne = 0x40, kHintClip = 0x80 };
+static_assert(((kRejected | kClipped | kZeroArea) & (kHintCw | kHintOne | kHintClip)) == 0);
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+
+// The count pass on the eight triangles tris[0..8) at once with AVX2: writes their hints to
+// hint[0..8) and returns their records, as setupDrawn's countOne does one by one (integers only:
+// the same verdicts). A SnapVertex is three 32-bit words (x, y, then inside and beyond in the low
+// bytes of the third), gathered by vertex index.
+static_assert(sizeof(SnapVertex) == 12 && offsetof(SnapVertex, y) == 4 && offsetof(SnapVertex, inside) == 8 &&
+              offsetof(SnapVertex, beyond) == 9);
+__attribute__((target("avx2"))) uint32_t countHints8(const Triangle* tris, const SnapVertex* snapped,
+                                                     const SetupParams& params, uint8_t* hint) {
+    const int* const corners = reinterpret_cast<const int*>(tris);
+    const int* const words = reinterpret_cast<const int*>(snapped);
+    const __m256i every3 = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21), ones = _mm256_set1_epi32(-1);
+    __m256i x[3], y[3], f = ones;
+    for (int k = 0; k < 3; ++k) {
+        const __m256i v = _mm256_i32gather_epi32(corners + k, every3, 4);
+        const __m256i w = _mm256_add_epi32(_mm256_add_epi32(v, v), v);  // the vertex's first word
+        x[k] = _mm256_i32gather_epi32(words, w, 4);
+        y[k] = _mm256_i32gather_epi32(words + 1, w, 4);
+        f = _mm256_and_si256(f, _mm256_i32gather_epi32(words + 2, w, 4));
+    }
+    const __m256i zero = _mm256_setzero_si256(), byte = _mm256_set1_epi32(0xFF);
+    const __m256i inside = _mm256_cmpeq_epi32(_mm256_and_si256(f, byte), _mm256_set1_epi32(1));
+    const __m256i rejected =
+        _mm256_xor_si256(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_srli_epi32(f, 8), byte), zero), ones);
+    // The orientation determinant in 64 bits: even lanes, then odd ones shifted down.
+    const __m256i dx1 = _mm256_sub_epi32(x[1], x[0]), dy2 = _mm256_sub_epi32(y[2], y[0]);
+    const __m256i dx2 = _mm256_sub_epi32(x[2], x[0]), dy1 = _mm256_sub_epi32(y[1], y[0]);
+    const __m256i even = _mm256_sub_epi64(_mm256_mul_epi32(dx1, dy2), _mm256_mul_epi32(dx2, dy1));
+    const __m256i odd = _mm256_sub_epi64(_mm256_mul_epi32(_mm256_srli_epi64(dx1, 32), _mm256_srli_epi64(dy2, 32)),
+                                         _mm256_mul_epi32(_mm256_srli_epi64(dx2, 32), _mm256_srli_epi64(dy1, 32)));
+    const __m256i flat = _mm256_blend_epi32(_mm256_cmpeq_epi64(even, zero), _mm256_cmpeq_epi64(odd, zero), 0xAA);
+    const __m256i cw = _mm256_blend_epi32(_mm256_cmpgt_epi64(zero, even), _mm256_cmpgt_epi64(zero, odd), 0xAA);
+    // boxHoldsCentre in 32 bits (|coordinate| <= 2^29 inside the clip volume).
+    const __m128i s = _mm_cvtsi32_si128(params.subpixelBits);
+    const __m256i half = _mm256_set1_epi32(1 << (params.subpixelBits - 1));
+    const __m256i minx = _mm256_min_epi32(_mm256_min_epi32(x[0], x[1]), x[2]);
+    const __m256i maxx = _mm256_max_epi32(_mm256_max_epi32(x[0], x[1]), x[2]);
+    const __m256i miny = _mm256_min_epi32(_mm256_min_epi32(y[0], y[1]), y[2]);
+    const __m256i maxy = _mm256_max_epi32(_mm256_max_epi32(y[0], y[1]), y[2]);
+    const __m256i lox =
+        _mm256_max_epi32(_mm256_sub_epi32(zero, _mm256_sra_epi32(_mm256_sub_epi32(half, minx), s)), zero);
+    const __m256i hix =
+        _mm256_min_epi32(_mm256_sra_epi32(_mm256_sub_epi32(maxx, half), s), _mm256_set1_epi32(params.width - 1));
+    const __m256i loy =
+        _mm256_max_epi32(_mm256_sub_epi32(zero, _mm256_sra_epi32(_mm256_sub_epi32(half, miny), s)), zero);
+    const __m256i hiy =
+        _mm256_min_epi32(_mm256_sra_epi32(_mm256_sub_epi32(maxy, half), s), _mm256_set1_epi32(params.height - 1));
+    const __m256i empty = _mm256_or_si256(_mm256_cmpgt_epi32(lox, hix), _mm256_cmpgt_epi32(loy, hiy));
+    const __m256i one = _mm256_andnot_si256(_mm256_or_si256(flat, empty), inside);
+    // clip ? kHintClip : one ? kHintOne | cw : rejected ? kRejected : flat ? kZeroArea : 0.
+    __m256i h = _mm256_blendv_epi8(_mm256_and_si256(flat, _mm256_set1_epi32(kZeroArea)), _mm256_set1_epi32(kRejected),
+                                   rejected);
+    h = _mm256_blendv_epi8(
+        h, _mm256_or_si256(_mm256_set1_epi32(kHintOne), _mm256_and_si256(cw, _mm256_set1_epi32(kHintCw))), one);
+    h = _mm256_blendv_epi8(_mm256_set1_epi32(kHintClip), h, inside);
+    // The low byte of each lane, eight bytes in triangle order.
+    const __m256i low =
+        _mm256_shuffle_epi8(h,
+                            _mm256_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 4, 8, 12,
+                                             -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1));
+    const uint32_t first = uint32_t(_mm256_extract_epi32(low, 0)), second = uint32_t(_mm256_extract_epi32(low, 4));
+    std::memcpy(hint, &first, 4);
+    std::memcpy(hint + 4, &second, 4);
+    const __m256i counted = _mm256_or_si256(_mm256_xor_si256(inside, ones), one);
+    return uint32_t(std::popcount(uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(counted)))));
+}
+
+#else
+
+uint32_t countHints8(const Triangle*, const SnapVertex*, const SetupParams&, uint8_t*) {
+    CULLIDE_CHECK(false, "countHints8 without AVX2");
+    return 0;
+}
+
+#endif
+
 }  // namespace
 
 void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri>& out) {
@@ -228,8 +315,6 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     // already the triangle's own (rejected, or zero area, or neither: no centre in its box), from
     // the snapped vertices alone (setupUnclipped's verdict: trivialReject by the vertices' sides).
     // kHintCw goes with kHintOne: the snapped triangle is clockwise.
-    enum : uint8_t { kHintCw = 0x20, kHintOne = 0x40, kHintClip = 0x80 };
-    static_assert(((kRejected | kClipped | kZeroArea) & (kHintCw | kHintOne | kHintClip)) == 0);
     std::vector<uint8_t>& hint = out.flags;  // sized by buildRecords before it counts
     auto countOne = [&](uint32_t t) -> uint32_t {
         const Triangle& tri = in.triangles[t];
@@ -242,9 +327,18 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
         hint[t] = (s0.beyond & s1.beyond & s2.beyond) != 0 ? kRejected : area ? 0 : kZeroArea;
         return 0;
     };
+    // Eight at a time where the CPU allows: the same hints and counts.
+    const bool batched = in.simd && haveInsideEdgeTri4();
+    auto countRange = [&](uint32_t lo, uint32_t hi) -> size_t {
+        size_t n = 0;
+        uint32_t t = lo;
+        if (batched)
+            for (; t + 8 <= hi; t += 8) n += countHints8(&in.triangles[t], in.snapped.data(), params, &hint[t]);
+        for (; t < hi; ++t) n += countOne(t);
+        return n;
+    };
     // One-record triangles are set up four at a time where the CPU allows (the records are the
     // same either way): each reserves its record, and a full batch fills all four.
-    const bool batched = in.simd && haveInsideEdgeTri4();
     const TileGrid& grid = in.grid;
     auto flush = [&](SubTriangles& scratch) {
         if (scratch.pending == 0) return;
@@ -265,7 +359,7 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
         scratch.pending = 0;
     };
     buildRecords<SubTriangles>(
-        out, in.triangles.size(), in.grid, countOne,
+        out, in.triangles.size(), in.grid, countRange,
         [&](uint32_t t, SubTriangles& scratch, auto&& emit, auto&& reserve) {
             const uint8_t h = hint[t];
             if ((h & (kHintOne | kHintClip)) == 0) return h;  // no record: the flags are known
@@ -311,9 +405,9 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
 void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const WindowError& err,
                             RecordSet<ConsRec>& out) {
     drawnChunks(list, Command::Op::DrawConservative, out);
-    auto countOne = [](uint32_t) -> uint32_t { return 1; };
+    auto countRange = [](uint32_t lo, uint32_t hi) -> size_t { return hi - lo; };
     buildRecords<NoScratch>(
-        out, in.triangles.size(), in.grid, countOne,
+        out, in.triangles.size(), in.grid, countRange,
         [&](uint32_t t, NoScratch&, auto&& emit, auto&&) -> uint8_t {
             const Triangle& tri = in.triangles[t];
             bool kept = false;
