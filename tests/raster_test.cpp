@@ -852,6 +852,12 @@ RandomScene randomScene(uint64_t seed, int W, int H, int triangles, int commands
                 v.x() = std::round(v.x() * 2) / 2;
                 v.y() = std::round(v.y() * 2) / 2;
             }
+        } else if (rng() % 6 == 0) {  // on half subpixels of 4, 8 or 12 bits: snapping's ties
+            const float grid = float(1 << (5 + 4 * int(rng() % 3)));
+            for (auto& v : p) {
+                v.x() = std::round(v.x() * grid) / grid;
+                v.y() = std::round(v.y() * grid) / grid;
+            }
         }
         s.geo.tri(p[0], p[1], p[2]);
     }

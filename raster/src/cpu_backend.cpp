@@ -43,6 +43,10 @@
 
 #include <string>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 namespace cullide::raster {
 
 const char* toString(FillRule rule) {
@@ -62,6 +66,81 @@ using detail::WinVertex;
 // follow each other. cullide::parallelFor (cullide/parallel.h) annotates the joins for
 // ThreadSanitizer.
 using cullide::parallelFor;
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define CULLIDE_WINDOW_AVX2 1
+
+// (a.x*x + a.y*y) + a.z*z on four lanes, as OrthoView::toWindow's dot3.
+__attribute__((target("avx2"))) inline __m256d dot4(const Vec3d& a, __m256d x, __m256d y, __m256d z) {
+    return _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(a.x()), x), _mm256_mul_pd(_mm256_set1_pd(a.y()), y)),
+        _mm256_mul_pd(_mm256_set1_pd(a.z()), z));
+}
+
+// (v - lo) / (hi - lo) * size - origin on four lanes, as toWindow.
+__attribute__((target("avx2"))) inline __m256d scale4(__m256d v, double lo, double hi, double size, double origin) {
+    const __m256d unit = _mm256_div_pd(_mm256_sub_pd(v, _mm256_set1_pd(lo)), _mm256_set1_pd(hi - lo));
+    return _mm256_sub_pd(_mm256_mul_pd(unit, _mm256_set1_pd(size)), _mm256_set1_pd(origin));
+}
+
+// snapToFixed on four lanes (`fixed` = 2^S), 0 where not `inside`. Its floor is _mm256_floor_pd:
+// for an inside vertex |v * 2^S| <= 2^29, where truncate-and-step and floor agree.
+__attribute__((target("avx2"))) inline __m128i snap4(__m256d v, __m256d fixed, __m256d inside) {
+    const __m256d s = _mm256_mul_pd(v, fixed);
+    const __m256d f = _mm256_floor_pd(s);
+    const __m256d up =
+        _mm256_and_pd(_mm256_cmp_pd(_mm256_sub_pd(s, f), _mm256_set1_pd(0.5), _CMP_GE_OQ), _mm256_set1_pd(1.0));
+    return _mm256_cvttpd_epi32(_mm256_and_pd(_mm256_add_pd(f, up), inside));
+}
+
+// transformVertex on the four vertices p[0..4) at once with AVX2: OrthoView::toWindow, then
+// insideClipVolume, snapToFixed and beyondSides, with the same double operations in the same
+// order (no FMA), so the same numbers bit for bit. (The scalar reference path transforms one by
+// one, so the Differential tests compare the two.)
+__attribute__((target("avx2"))) void transformVertices4(const Vec3f* p, const OrthoView& view,
+                                                        const SetupParams& params, WinVertex* window,
+                                                        SnapVertex* snapped) {
+    const __m256d px = _mm256_setr_pd(p[0].x(), p[1].x(), p[2].x(), p[3].x());
+    const __m256d py = _mm256_setr_pd(p[0].y(), p[1].y(), p[2].y(), p[3].y());
+    const __m256d pz = _mm256_setr_pd(p[0].z(), p[1].z(), p[2].z(), p[3].z());
+    const __m256d x =
+        scale4(dot4(view.right, px, py, pz), view.xmin, view.xmax, double(view.fullWidth()), double(view.originX));
+    const __m256d y =
+        scale4(dot4(view.up, px, py, pz), view.ymin, view.ymax, double(view.fullHeight()), double(view.originY));
+    const __m256d z = _mm256_div_pd(_mm256_sub_pd(dot4(view.dir, px, py, pz), _mm256_set1_pd(view.znear)),
+                                    _mm256_set1_pd(view.zfar - view.znear));
+    // insideClipVolume (ordered comparisons: NaN is outside).
+    const double g = guardBandPixels(params.subpixelBits);
+    const __m256d zero = _mm256_setzero_pd(), G = _mm256_set1_pd(g), minusG = _mm256_set1_pd(-g);
+    const __m256d inside = _mm256_and_pd(
+        _mm256_and_pd(
+            _mm256_and_pd(_mm256_cmp_pd(z, zero, _CMP_GE_OQ), _mm256_cmp_pd(z, _mm256_set1_pd(1.0), _CMP_LE_OQ)),
+            _mm256_and_pd(_mm256_cmp_pd(x, minusG, _CMP_GE_OQ), _mm256_cmp_pd(x, G, _CMP_LE_OQ))),
+        _mm256_and_pd(_mm256_cmp_pd(y, minusG, _CMP_GE_OQ), _mm256_cmp_pd(y, G, _CMP_LE_OQ)));
+    const __m256d fixed = _mm256_set1_pd(double(int64_t(1) << params.subpixelBits));
+    alignas(16) int32_t sx[4], sy[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(sx), snap4(x, fixed, inside));
+    _mm_store_si128(reinterpret_cast<__m128i*>(sy), snap4(y, fixed, inside));
+    const int in = _mm256_movemask_pd(inside);
+    const int left = _mm256_movemask_pd(_mm256_cmp_pd(x, zero, _CMP_LT_OQ));
+    const int right = _mm256_movemask_pd(_mm256_cmp_pd(x, _mm256_set1_pd(double(params.width)), _CMP_GT_OQ));
+    const int bottom = _mm256_movemask_pd(_mm256_cmp_pd(y, zero, _CMP_LT_OQ));
+    const int top = _mm256_movemask_pd(_mm256_cmp_pd(y, _mm256_set1_pd(double(params.height)), _CMP_GT_OQ));
+    alignas(32) double wx[4], wy[4], wz[4];
+    _mm256_store_pd(wx, x);
+    _mm256_store_pd(wy, y);
+    _mm256_store_pd(wz, z);
+    for (int l = 0; l < 4; ++l) {
+        window[l] = {wx[l], wy[l], wz[l]};
+        SnapVertex& s = snapped[l];
+        s.inside = (in >> l & 1) != 0;
+        s.x = sx[l];
+        s.y = sy[l];
+        s.beyond = uint8_t(((left >> l & 1) ? detail::kBeyondLeft : 0) | ((right >> l & 1) ? detail::kBeyondRight : 0) |
+                           ((bottom >> l & 1) ? detail::kBeyondBottom : 0) | ((top >> l & 1) ? detail::kBeyondTop : 0));
+    }
+}
+#endif
 
 class CpuBackendImpl final : public CpuBackend {
 public:
@@ -275,8 +354,15 @@ private:
             last = &c;
         }
         if (3 * drawn >= positions_.size()) {
+            const bool batched = windowBatched();
             parallelFor(0, positions_.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
-                for (size_t v = r.begin(); v != r.end(); ++v) transformVertex(v);
+                size_t v = r.begin();
+#ifdef CULLIDE_WINDOW_AVX2
+                if (batched)
+                    for (; v + 4 <= r.end(); v += 4)
+                        transformVertices4(&positions_[v], view_, params_, &window_[v], &snapped_[v]);
+#endif
+                for (; v != r.end(); ++v) transformVertex(v);
             });
             windowAll_ = true;
             return;
@@ -290,6 +376,16 @@ private:
                         stamps_[v] = stamp_;
                     }
         }
+    }
+
+    // Whether updateWindow transforms four vertices at a time (the fast path with simd, on a CPU with
+    // AVX2): the scalar reference path keeps transformVertex, so the Differential tests compare the two.
+    bool windowBatched() const {
+#ifdef CULLIDE_WINDOW_AVX2
+        return options_.simd && !options_.scalarReference && __builtin_cpu_supports("avx2");
+#else
+        return false;
+#endif
     }
 
     void transformVertex(size_t v) {
