@@ -89,6 +89,92 @@ __attribute__((target("avx2"))) inline __m128i depthTest4(__m128i incoming, __m1
     return _mm_and_si128(ok, lanes);
 }
 
+// clampDepth and the encoding of rules.h on four lanes (`bits`: unorm bits; unused for Float).
+template <bool Float>
+__attribute__((target("avx2"))) inline __m128i clampEncode4(__m256d z, int bits) {
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
+    z = _mm256_and_pd(z, _mm256_cmp_pd(z, zero, _CMP_GT_OQ));  // !(z > 0): +0 (NaN too)
+    z = _mm256_blendv_pd(z, one, _mm256_cmp_pd(z, one, _CMP_GT_OQ));
+    if constexpr (Float) {
+        return _mm_castps_si128(_mm256_cvtpd_ps(z));  // round to nearest, as float(z)
+    } else {
+        const __m256d a = _mm256_mul_pd(z, _mm256_set1_pd(double(uint64_t(1) << bits)));
+        const __m256d f = _mm256_round_pd(a, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+        const __m256d r = _mm256_sub_pd(a, f);
+        const __m256d up =
+            _mm256_and_pd(_mm256_cmp_pd(r, half, _CMP_GE_OQ), _mm256_cmp_pd(_mm256_sub_pd(r, half), z, _CMP_GE_OQ));
+        const __m256d down =
+            _mm256_and_pd(_mm256_cmp_pd(r, half, _CMP_LT_OQ), _mm256_cmp_pd(_mm256_add_pd(r, half), z, _CMP_LT_OQ));
+        const __m256d code = _mm256_sub_pd(_mm256_add_pd(f, _mm256_and_pd(up, one)), _mm256_and_pd(down, one));
+        // An integer below 2^32 plus 2^52 holds it in its low 32 bits.
+        return _mm256_castsi256_si128(
+            _mm256_permutevar8x32_epi32(_mm256_castpd_si256(_mm256_add_pd(code, _mm256_set1_pd(0x1p52))),
+                                        _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0)));
+    }
+}
+
+// A record whose rectangle, clipped to the tile, is at most 2 x 2 pixels (most, on meshes finer
+// than the image): all its pixels in one vector, lanes (x0, y0), (x0 + 1, y0), (x0, y0 + 1),
+// (x0 + 1, y0 + 1), instead of the scalar loop's chain of double operations per pixel. The same
+// edge functions (integers), the same depth operations per pixel in the same order
+// (DepthPlane::row, then at), so the same fragments, depths and counts; recorded as one group per
+// row (replays apply the same fragments in the same order).
+template <DepthFunc F, bool Float, bool Record>
+__attribute__((target("avx2"))) void rasterizeSmallAvx2(const EdgeTri& t, int x0, int y0, int x1, int y1,
+                                                        uint32_t* depth, size_t stride, bool mask, int bits,
+                                                        uint64_t& fragments, uint64_t& passed, FragGroup*& rec) {
+    const int wide = x1 > x0, tall = y1 > y0;
+    const int valid = (wide ? 3 : 1) | (tall ? (wide ? 12 : 4) : 0);
+    int outside = 0;
+    {
+        __m256i any = _mm256_setzero_si256();
+        for (int k = 0; k < 3; ++k) {
+            const int64_t a = t.a[k], b = t.b[k], base = a * x0 + b * y0 + t.c[k];
+            any = _mm256_or_si256(any, _mm256_add_epi64(_mm256_set1_epi64x(base), _mm256_setr_epi64x(0, a, b, a + b)));
+        }
+        outside = _mm256_movemask_pd(_mm256_castsi256_pd(any));
+    }
+    const int inside = ~outside & valid;
+    if (inside == 0) return;
+    // Pixel centres double(i) + 0.5 and double(j) + 0.5: exact.
+    const __m256d cx = _mm256_setr_pd(x0 + 0.5, x0 + 1.5, x0 + 0.5, x0 + 1.5);
+    const __m256d cy = _mm256_setr_pd(y0 + 0.5, y0 + 0.5, y0 + 1.5, y0 + 1.5);
+    const DepthPlane& p = t.plane;
+    const __m256d row = _mm256_add_pd(_mm256_set1_pd(p.z0),
+                                      _mm256_mul_pd(_mm256_set1_pd(p.dzdy), _mm256_sub_pd(cy, _mm256_set1_pd(p.y0))));
+    const __m256d z =
+        _mm256_add_pd(row, _mm256_mul_pd(_mm256_set1_pd(p.dzdx), _mm256_sub_pd(cx, _mm256_set1_pd(p.x0))));
+    const __m128i incoming = clampEncode4<Float>(z, bits);
+    uint32_t* const d0 = depth + size_t(y0) * stride + size_t(x0);
+    uint32_t* const d1 = tall ? d0 + stride : d0;  // the second row's, read and written only when there is one
+    const int top = inside & 3, bottom = inside >> 2;
+    if constexpr (Record) {
+        if (top) {
+            FragGroup* g = rec++;
+            g->pixel = uint32_t(size_t(y0) * stride + size_t(x0));
+            g->lanes = uint32_t(top);
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), incoming);
+        }
+        if (bottom) {
+            FragGroup* g = rec++;
+            g->pixel = uint32_t(size_t(y0 + 1) * stride + size_t(x0));
+            g->lanes = uint32_t(bottom);
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), _mm_srli_si128(incoming, 8));
+        }
+    }
+    const auto laneMask = [](int bits4) { return _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[bits4])); };
+    const __m128i stored = _mm_unpacklo_epi64(_mm_maskload_epi32(reinterpret_cast<const int*>(d0), laneMask(top)),
+                                              _mm_maskload_epi32(reinterpret_cast<const int*>(d1), laneMask(bottom)));
+    const __m128i ok = depthTest4<F>(incoming, stored, laneMask(inside));
+    const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
+    fragments += uint64_t(std::popcount(unsigned(inside)));
+    passed += uint64_t(std::popcount(unsigned(okBits)));
+    if (mask && okBits != 0) {
+        _mm_maskstore_epi32(reinterpret_cast<int*>(d0), _mm_and_si128(ok, laneMask(3)), incoming);
+        _mm_maskstore_epi32(reinterpret_cast<int*>(d1), _mm_srli_si128(ok, 8), _mm_srli_si128(incoming, 8));
+    }
+}
+
 template <DepthFunc F, bool Float, bool Record>
 __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int bx0, int by0, int bx1, int by1,
                                                          uint32_t* depth, size_t stride, bool mask, int bits,
@@ -96,11 +182,15 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
     const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
     if (x0 > x1 || y0 > y1) return;
-    // Records one or two pixels wide (most, on meshes finer than the image) cost less in the
-    // scalar loop than the vector constants do.
-    if (x1 - x0 < 2)
+    // Records one or two pixels wide: at most 2 x 2 in one vector, taller ones in the scalar loop
+    // (they cost less there than the vector constants do).
+    if (x1 - x0 < 2) {
+        if (y1 - y0 < 2)
+            return rasterizeSmallAvx2<F, Float, Record>(t, x0, y0, x1, y1, depth, stride, mask, bits, fragments, passed,
+                                                        rec);
         return rasterizeInTile<F, Float, Record>(t, bx0, by0, bx1, by1, depth, stride, mask, bits, fragments, passed,
                                                  rec);
+    }
     const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2], b0 = t.b[0], b1 = t.b[1], b2 = t.b[2];
     const __m256i off0 = _mm256_set_epi64x(3 * a0, 2 * a0, a0, 0), step0 = _mm256_set1_epi64x(4 * a0);
     const __m256i off1 = _mm256_set_epi64x(3 * a1, 2 * a1, a1, 0), step1 = _mm256_set1_epi64x(4 * a1);
@@ -108,9 +198,6 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     // Pixel centre i + l + 0.5 as double(i) + (l + 0.5): both exact, so the same value.
     const __m256d centres = _mm256_set_pd(3.5, 2.5, 1.5, 0.5);
     const __m256d planeX0 = _mm256_set1_pd(t.plane.x0), dzdx = _mm256_set1_pd(t.plane.dzdx);
-    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
-    const __m256d scale = _mm256_set1_pd(double(uint64_t(1) << bits)), magic = _mm256_set1_pd(0x1p52);
-    const __m256i low32 = _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0);
     uint64_t frag = 0, pass = 0;
     for (int j = y0; j <= y1; ++j) {
         __m256i e0 = _mm256_add_epi64(_mm256_set1_epi64x(a0 * x0 + b0 * j + t.c[0]), off0);
@@ -124,27 +211,9 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
             const int valid = x1 - i >= 3 ? 15 : (1 << (x1 - i + 1)) - 1;
             const int inside = ~outside & valid;
             if (inside == 0) continue;
-            // clampDepth and the encoding of rules.h, lane by lane.
-            __m256d z = _mm256_add_pd(
+            const __m256d z = _mm256_add_pd(
                 row, _mm256_mul_pd(dzdx, _mm256_sub_pd(_mm256_add_pd(_mm256_set1_pd(double(i)), centres), planeX0)));
-            z = _mm256_and_pd(z, _mm256_cmp_pd(z, zero, _CMP_GT_OQ));  // !(z > 0): +0 (NaN too)
-            z = _mm256_blendv_pd(z, one, _mm256_cmp_pd(z, one, _CMP_GT_OQ));
-            __m128i incoming;
-            if constexpr (Float) {
-                incoming = _mm_castps_si128(_mm256_cvtpd_ps(z));  // round to nearest, as float(z)
-            } else {
-                const __m256d a = _mm256_mul_pd(z, scale);
-                const __m256d f = _mm256_round_pd(a, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
-                const __m256d r = _mm256_sub_pd(a, f);
-                const __m256d up = _mm256_and_pd(_mm256_cmp_pd(r, half, _CMP_GE_OQ),
-                                                 _mm256_cmp_pd(_mm256_sub_pd(r, half), z, _CMP_GE_OQ));
-                const __m256d down = _mm256_and_pd(_mm256_cmp_pd(r, half, _CMP_LT_OQ),
-                                                   _mm256_cmp_pd(_mm256_add_pd(r, half), z, _CMP_LT_OQ));
-                const __m256d code = _mm256_sub_pd(_mm256_add_pd(f, _mm256_and_pd(up, one)), _mm256_and_pd(down, one));
-                // An integer below 2^32 plus 2^52 holds it in its low 32 bits.
-                incoming = _mm256_castsi256_si128(
-                    _mm256_permutevar8x32_epi32(_mm256_castpd_si256(_mm256_add_pd(code, magic)), low32));
-            }
+            const __m128i incoming = clampEncode4<Float>(z, bits);
             if constexpr (Record) {
                 FragGroup* g = rec++;
                 g->pixel = uint32_t(size_t(j) * stride + size_t(i));
