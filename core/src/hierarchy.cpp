@@ -69,12 +69,20 @@ uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
 template <typename T>
 using Pages = UnwrittenVector<T, true>;
 
+// A part of a node's partition: its size, and whether its order is a breadth-first order of the
+// whole part from its first position (see partition()).
+struct Part {
+    uint32_t size;
+    bool searched;
+};
+
 // What one thread's splits write besides the shared arrays, indexed from the start of the range
 // being split: queue (breadth-first order, then the new order), tmp (pieces, then triangle ids),
 // tmpSlots (rebuilt rows, 3 each), and the small stacks.
 struct Scratch {
     Pages<uint32_t> queue, tmp, tmpSlots;
-    std::vector<uint32_t> sizes, pieceStart;
+    std::vector<Part> sizes;
+    std::vector<uint32_t> pieceStart;
     std::vector<uint8_t> moved;
 
     void reserve(uint32_t n) {  // for ranges of up to n positions
@@ -111,7 +119,7 @@ public:
             root_.reserve(n);
             mark_.resize(n);
         }
-        split(out_.nodes, 0, root_);
+        split(out_.nodes, 0, root_, false);
     }
 
 private:
@@ -204,16 +212,20 @@ private:
     // their indices shifted: the same nodes, in the same order, as one thread would make. The
     // subtrees' positions are disjoint ranges, so they share the arrays indexed by position or by
     // triangle id (each writes only its own part) and read the overflow rows only.
-    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s) {
+    //
+    // `searched`: the node's order is a breadth-first order of the whole node from its first
+    // position (Part::searched), so that search's farthest position is known: the last one.
+    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s, bool searched) {
         const HierarchyNode node = nodes[i];
         if (node.count <= opt_.leafSize) return;
         const uint32_t k = std::min<uint32_t>(opt_.branching, node.count);
         // s.sizes is a stack: this node's children stay on it while their subtrees push theirs.
         const size_t base = s.sizes.size();
         if (opt_.kind == HierarchyKind::Connectivity) {
-            partition(s, node.first, node.first + node.count, k, kNone);
+            const uint32_t hi = node.first + node.count;
+            partition(s, node.first, hi, k, searched ? hi - 1 : kNone, searched);
         } else {
-            for (uint32_t c = 0; c < k; ++c) s.sizes.push_back(node.count / k + (c < node.count % k ? 1 : 0));
+            for (uint32_t c = 0; c < k; ++c) s.sizes.push_back({node.count / k + (c < node.count % k ? 1 : 0), false});
         }
 
         const uint32_t firstChild = uint32_t(nodes.size());
@@ -222,25 +234,27 @@ private:
         nodes[i].childCount = childCount;
         uint32_t first = node.first;
         for (size_t c = base; c < s.sizes.size(); ++c) {
-            const uint32_t size = s.sizes[c];
+            const uint32_t size = s.sizes[c].size;
             CULLIDE_CHECK(size > 0 && size < node.count, "a child is smaller than its parent and not empty");
             nodes.push_back({first, size, 0, 0, node.depth + 1});
             first += size;
         }
-        s.sizes.resize(base);
         if (node.count < kParallelNode) {
-            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s);
+            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s, s.sizes[base + c].searched);
+            s.sizes.resize(base);
             return;
         }
         // A node this large is the root or a parallel task's own root, so its scratch serves no
         // later sibling: freed before the children allocate theirs (peak memory).
         s.queue = {}, s.tmp = {}, s.tmpSlots = {};
+        std::vector<Part> parts(s.sizes.begin() + std::ptrdiff_t(base), s.sizes.end());
+        s.sizes.resize(base);
         std::vector<std::vector<HierarchyNode>> sub(childCount);
         parallelForEach(0, childCount, [&](size_t c) {
             sub[c] = {nodes[firstChild + c]};
             Scratch local;
             if (opt_.kind == HierarchyKind::Connectivity) local.reserve(sub[c][0].count);
-            split(sub[c], 0, local);
+            split(sub[c], 0, local, parts[c].searched);
         });
         for (uint32_t c = 0; c < childCount; ++c) {
             // Local index j >= 1 lands at nodes.size() + j - 1; leaves keep firstChild 0.
@@ -297,10 +311,12 @@ private:
     // pieces (cut off from its largest piece, so bordered by the first part) move to the first
     // part. Sizes are therefore near-equal, not exact.
     // `hint`: a position on the range's periphery, when the caller knows one (kNone otherwise).
-    void partition(Scratch& s, uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint) {
+    // `searched`: the range's order is a breadth-first order of the whole range from lo (pushed
+    // with its size when the range is a part).
+    void partition(Scratch& s, uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint, bool searched) {
         const uint32_t n = hi - lo;
         if (k < 2 || n < 2) {
-            s.sizes.push_back(n);
+            s.sizes.push_back({n, searched});
             return;
         }
         const uint32_t half = k / 2;
@@ -311,11 +327,12 @@ private:
         // Breadth-first order over the range from the seed; when a component is exhausted, go on
         // from the first unvisited position.
         uint32_t* bfs = s.queue.data();
-        uint32_t size = 0, scan = lo, start = seed;
+        uint32_t size = 0, scan = lo, start = seed, firstComponent = 0;
         while (size < n) {
             mark_[start] = kVisited;
             bfs[size++] = start;
             size = grow(bfs, size - 1, size, lo, hi);
+            if (firstComponent == 0) firstComponent = size;
             while (scan < hi && mark_[scan] != kOpen) ++scan;
             if (scan < hi) start = scan;
         }
@@ -341,7 +358,7 @@ private:
 
         // The new order, in bfs: the first part (its prefix is in place), then the second.
         s.moved.assign(pieceCount, 0);
-        uint32_t f = target;
+        uint32_t f = target, kept = uint32_t(pieceCount);
         for (size_t p = 0; p < pieceCount; ++p) {
             if (p == largest) continue;  // stays in the second part whatever it touches
             bool touchesFirst = false;
@@ -349,6 +366,7 @@ private:
                 forNeighbours(pieces[i], lo, hi, [&](uint32_t u) { touchesFirst |= mark_[u] == kFirst; });
             if (!touchesFirst) continue;
             s.moved[p] = 1;
+            --kept;
             f = uint32_t(std::copy(pieces + s.pieceStart[p], pieces + s.pieceStart[p + 1], bfs + f) - bfs);
         }
         for (size_t p = 0, e = f; p < pieceCount; ++p)
@@ -386,8 +404,15 @@ private:
         // Peripheral starts for the halves, for free: the first part is a ball around the seed
         // whose last-reached triangle lies on its rim; the second part's first triangle borders
         // the first part. (The second part is a breadth-first order too, so its rim is its end.)
-        partition(s, lo, lo + f, half, lo + f - 1);
-        partition(s, lo + f, hi, k - half, hi - 1);
+        //
+        // Which halves are breadth-first orders of themselves from their first position, for the
+        // nodes they may become (split() then needs no search for a peripheral start): the first
+        // part when it is a prefix of the seed's search alone (the searches restricted to a prefix
+        // of a breadth-first order find the prefix in the same order: each triangle of it is
+        // reached from an earlier one), the second when it is one piece (its own search).
+        const bool firstSearched = target <= firstComponent && f == target, secondSearched = kept == 1;
+        partition(s, lo, lo + f, half, lo + f - 1, firstSearched);
+        partition(s, lo + f, hi, k - half, hi - 1, secondSearched);
     }
 
     // The position of [lo, hi) farthest in hops from `from` (ties: the last reached in
