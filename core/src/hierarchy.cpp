@@ -79,16 +79,26 @@ struct Part {
 // What one thread's splits write besides the shared arrays, indexed from the start of the range
 // being split: queue (breadth-first order, then the new order), tmp (pieces, then triangle ids),
 // tmpSlots (rebuilt rows, 3 each), and the small stacks.
+//
+// The three arrays are views: the root's are the build's own arrays (Builder::queue_, ...), and a
+// parallel subtree's are a slice of its parent's, not arrays of its own. Fresh pages cost a page
+// fault each on first write, and on the shared build machine's VM a 4 KiB fault costs ~17 us
+// (4 ms per MiB): the subtrees' own scratch (40 MB in 4 KiB-page arrays for 1M triangles) was
+// about a fifth of a 1M build. The memory is the same: a parent's scratch was freed before its
+// children allocated theirs, as large together.
+// For a range of m positions, queue and tmp hold m + slack entries (a search writes one past its
+// last entry, so slack >= 1, and siblings' slices must not overlap there), tmpSlots 3m.
 struct Scratch {
-    Pages<uint32_t> queue, tmp, tmpSlots;
+    uint32_t *queue = nullptr, *tmp = nullptr, *tmpSlots = nullptr;
+    size_t slack = 0;
     std::vector<Part> sizes;
     std::vector<uint32_t> pieceStart;
     std::vector<uint8_t> moved;
+    Pages<uint32_t> ownQueue, ownTmp, ownSlots;  // only where the parent's slack ran out
 
-    void reserve(uint32_t n) {  // for ranges of up to n positions
-        queue.resize(size_t(n) + 1);  // + 1: a search writes one past its last entry
-        tmp.resize(size_t(n) + 1);
-        if (tmpSlots.size() < 3 * size_t(n)) tmpSlots.resize(3 * size_t(n));  // the root's: the incidence array
+    void allocate(uint32_t n) {  // arrays of its own, for ranges of up to n positions
+        ownQueue.resize(size_t(n) + 1), ownTmp.resize(size_t(n) + 1), ownSlots.resize(3 * size_t(n));
+        queue = ownQueue.data(), tmp = ownTmp.data(), tmpSlots = ownSlots.data(), slack = 1;
     }
 };
 
@@ -116,8 +126,14 @@ public:
         if (opt_.kind == HierarchyKind::Connectivity) {
             CULLIDE_CHECK(n < kFirst, "triangle count leaves room for the labels");
             buildAdjacency();
-            root_.reserve(n);
             mark_.resize(n);
+            // Slack for a slice per parallel subtree: each level of parallel subtrees divides it
+            // by the branching (a 1M build has two such levels); where it runs out, a subtree
+            // allocates its own scratch.
+            const size_t slack = 1 + n / 1024;
+            queue_.resize(n + slack), tmp_.resize(n + slack);
+            root_.queue = queue_.data(), root_.tmp = tmp_.data(), root_.tmpSlots = tmpSlots_.data();
+            root_.slack = slack;
         }
         split(out_.nodes, 0, root_, false);
     }
@@ -201,7 +217,7 @@ private:
         }
         // Rebuilt rows are written aside, then copied back: the incidence array (3n entries, as
         // many as the slots) serves for that.
-        root_.tmpSlots = std::move(incident);
+        tmpSlots_ = std::move(incident);
     }
 
     // Splits nodes[i] and its descendants, appending them to `nodes` depth first: a node's
@@ -245,15 +261,24 @@ private:
             return;
         }
         // A node this large is the root or a parallel task's own root, so its scratch serves no
-        // later sibling: freed before the children allocate theirs (peak memory).
-        s.queue = {}, s.tmp = {}, s.tmpSlots = {};
+        // later sibling: its children work in slices of it. Child c's queue and tmp start c
+        // slacks after its first position, and hold its range and one slack more: disjoint.
+        const size_t childSlack = s.slack / childCount;
         std::vector<Part> parts(s.sizes.begin() + std::ptrdiff_t(base), s.sizes.end());
         s.sizes.resize(base);
         std::vector<std::vector<HierarchyNode>> sub(childCount);
         parallelForEach(0, childCount, [&](size_t c) {
             sub[c] = {nodes[firstChild + c]};
             Scratch local;
-            if (opt_.kind == HierarchyKind::Connectivity) local.reserve(sub[c][0].count);
+            if (opt_.kind == HierarchyKind::Connectivity) {
+                const size_t offset = sub[c][0].first - node.first;
+                if (childSlack >= 1) {
+                    local.queue = s.queue + offset + c * childSlack, local.tmp = s.tmp + offset + c * childSlack;
+                    local.tmpSlots = s.tmpSlots + 3 * offset, local.slack = childSlack;
+                } else {
+                    local.allocate(sub[c][0].count);
+                }
+            }
             split(sub[c], 0, local, parts[c].searched);
         });
         for (uint32_t c = 0; c < childCount; ++c) {
@@ -326,7 +351,7 @@ private:
         const uint32_t seed = hint != kNone ? hint : farthest(s, lo, hi);
         // Breadth-first order over the range from the seed; when a component is exhausted, go on
         // from the first unvisited position.
-        uint32_t* bfs = s.queue.data();
+        uint32_t* bfs = s.queue;
         uint32_t size = 0, scan = lo, start = seed, firstComponent = 0;
         while (size < n) {
             mark_[start] = kVisited;
@@ -339,7 +364,7 @@ private:
 
         // Label the first part kFirst, then find the pieces of the rest, one after another in s.tmp.
         for (uint32_t i = 0; i < n; ++i) mark_[bfs[i]] = i < target ? kFirst : kOpen;
-        uint32_t* pieces = s.tmp.data();
+        uint32_t* pieces = s.tmp;
         uint32_t pieceEnd = 0;
         s.pieceStart.clear();
         for (uint32_t i = target; i < n; ++i) {
@@ -377,7 +402,7 @@ private:
         // would read them at random).
         for (uint32_t j = 0; j < n; ++j) mark_[bfs[j]] = lo + j;
         for (uint32_t p = lo; p < hi; ++p) s.tmp[mark_[p] - lo] = out_.order[p];
-        std::copy(s.tmp.begin(), s.tmp.begin() + n, out_.order.begin() + lo);
+        std::copy(s.tmp, s.tmp + n, out_.order.begin() + lo);
         if (!posOf_.empty())
             for (uint32_t p = lo; p < hi; ++p) posOf_[out_.order[p]] = p;
         if (needsRows(f, half) || needsRows(n - f, k - half)) {
@@ -388,7 +413,7 @@ private:
                 const uint32_t np = mark_[p];
                 const uint32_t a = np < mid ? lo : mid, b = np < mid ? mid : hi;
                 const uint32_t* slot = slots_.data() + 3 * size_t(p);
-                uint32_t* out = s.tmpSlots.data() + 3 * size_t(np - lo);
+                uint32_t* out = s.tmpSlots + 3 * size_t(np - lo);
                 if (slot[0] == kEscape) {
                     std::copy(slot, slot + 3, out);
                     continue;
@@ -398,7 +423,7 @@ private:
                     out[i] = q >= a && q < b ? q : np;
                 }
             }
-            std::copy(s.tmpSlots.begin(), s.tmpSlots.begin() + 3 * size_t(n), slots_.begin() + 3 * size_t(lo));
+            std::copy(s.tmpSlots, s.tmpSlots + 3 * size_t(n), slots_.begin() + 3 * size_t(lo));
         }
 
         // Peripheral starts for the halves, for free: the first part is a ball around the seed
@@ -418,7 +443,7 @@ private:
     // The position of [lo, hi) farthest in hops from `from` (ties: the last reached in
     // breadth-first order). Expects the range labelled kOpen and leaves it so.
     uint32_t farthest(Scratch& s, uint32_t from, uint32_t hi) {
-        uint32_t* queue = s.queue.data();
+        uint32_t* queue = s.queue;
         queue[0] = from;
         mark_[from] = kVisited;
         const uint32_t size = grow(queue, 0, 1, from, hi);  // from is the range's first position
@@ -439,6 +464,7 @@ private:
     // overflows: posOf_. slots_ and mark_ start unwritten (cullide/unwritten.h; zeroing the
     // arrays of n or 3n entries was 12% of a 1M build).
     Pages<uint32_t> slots_, mark_;
+    Pages<uint32_t> queue_, tmp_, tmpSlots_;  // the root's scratch, sliced for parallel subtrees
     std::vector<uint32_t> overflow_, posOf_;
 };
 
