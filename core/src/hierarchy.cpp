@@ -77,8 +77,9 @@ struct Part {
 };
 
 // What one thread's splits write besides the shared arrays, indexed from the start of the range
-// being split: queue (breadth-first order, then the new order), tmp (pieces, then triangle ids),
-// tmpSlots (rebuilt rows, 3 each), and the small stacks.
+// being split: queue (breadth-first order, then the new order), tmpSlots (first the pieces, then
+// triangle ids, then rebuilt rows, 3 each: one after another, so they share it), and the small
+// stacks.
 //
 // The three arrays are views: the root's are the build's own arrays (Builder::queue_, ...), and a
 // parallel subtree's are a slice of its parent's, not arrays of its own. Fresh pages cost a page
@@ -86,19 +87,19 @@ struct Part {
 // (4 ms per MiB): the subtrees' own scratch (40 MB in 4 KiB-page arrays for 1M triangles) was
 // about a fifth of a 1M build. The memory is the same: a parent's scratch was freed before its
 // children allocated theirs, as large together.
-// For a range of m positions, queue and tmp hold m + slack entries (a search writes one past its
-// last entry, so slack >= 1, and siblings' slices must not overlap there), tmpSlots 3m.
+// For a range of m positions, queue holds m + slack entries and tmpSlots 3m + slack (a search
+// writes one past its last entry, so slack >= 1, and siblings' slices must not overlap there).
 struct Scratch {
-    uint32_t *queue = nullptr, *tmp = nullptr, *tmpSlots = nullptr;
+    uint32_t *queue = nullptr, *tmpSlots = nullptr;
     size_t slack = 0;
     std::vector<Part> sizes;
     std::vector<uint32_t> pieceStart;
     std::vector<uint8_t> moved;
-    Pages<uint32_t> ownQueue, ownTmp, ownSlots;  // only where the parent's slack ran out
+    Pages<uint32_t> ownQueue, ownSlots;  // only where the parent's slack ran out
 
     void allocate(uint32_t n) {  // arrays of its own, for ranges of up to n positions
-        ownQueue.resize(size_t(n) + 1), ownTmp.resize(size_t(n) + 1), ownSlots.resize(3 * size_t(n));
-        queue = ownQueue.data(), tmp = ownTmp.data(), tmpSlots = ownSlots.data(), slack = 1;
+        ownQueue.resize(size_t(n) + 1), ownSlots.resize(3 * size_t(n) + 1);
+        queue = ownQueue.data(), tmpSlots = ownSlots.data(), slack = 1;
     }
 };
 
@@ -125,15 +126,14 @@ public:
         if (n <= opt_.leafSize) return;  // a leaf root: no adjacency to build
         if (opt_.kind == HierarchyKind::Connectivity) {
             CULLIDE_CHECK(n < kFirst, "triangle count leaves room for the labels");
-            buildAdjacency();
-            mark_.resize(n);
             // Slack for a slice per parallel subtree: each level of parallel subtrees divides it
             // by the branching (a 1M build has two such levels); where it runs out, a subtree
             // allocates its own scratch.
             const size_t slack = 1 + n / 1024;
-            queue_.resize(n + slack), tmp_.resize(n + slack);
-            root_.queue = queue_.data(), root_.tmp = tmp_.data(), root_.tmpSlots = tmpSlots_.data();
-            root_.slack = slack;
+            queue_.resize(n + slack);
+            buildAdjacency(slack);
+            mark_.resize(n);
+            root_.queue = queue_.data(), root_.tmpSlots = tmpSlots_.data(), root_.slack = slack;
         }
         split(out_.nodes, 0, root_, false);
     }
@@ -152,14 +152,21 @@ private:
     // (a == b) connect nothing. Built from the vertex -> triangle incidence (linear time): the
     // triangles sharing edge (a, b) are among those incident to a. Positions are triangle ids at
     // the root.
-    void buildAdjacency() {
+    //
+    // The incidence array becomes the root's tmpSlots (3n + slack entries), and the vertex starts
+    // live in the root's queue where they fit: both are then written for the first time here, and
+    // their page faults are paid once.
+    void buildAdjacency(size_t slack) {
         const uint32_t n = uint32_t(mesh_.triangles.size());
         const size_t nv = mesh_.positions.size();
-        std::vector<uint32_t> vstart(nv + 1, 0);
+        std::vector<uint32_t> ownStart;
+        if (nv + 1 > queue_.size()) ownStart.resize(nv + 1);
+        const std::span<uint32_t> vstart = ownStart.empty() ? std::span(queue_.data(), nv + 1) : std::span(ownStart);
+        std::fill(vstart.begin(), vstart.end(), 0u);
         for (const Triangle& tri : mesh_.triangles)
             for (uint32_t v : tri) ++vstart[v + 1];
         for (size_t v = 0; v < nv; ++v) vstart[v + 1] += vstart[v];
-        Pages<uint32_t> incident(vstart[nv]);
+        Pages<uint32_t> incident(vstart[nv] + slack);  // vstart[nv] = 3n
         // Fill by advancing each vertex's start to its end, then shift the starts back: no array
         // of cursors.
         for (uint32_t t = 0; t < n; ++t)
@@ -261,8 +268,8 @@ private:
             return;
         }
         // A node this large is the root or a parallel task's own root, so its scratch serves no
-        // later sibling: its children work in slices of it. Child c's queue and tmp start c
-        // slacks after its first position, and hold its range and one slack more: disjoint.
+        // later sibling: its children work in slices of it. Child c's slices start c slacks after
+        // its first position's, and hold its range and one slack more: disjoint.
         const size_t childSlack = s.slack / childCount;
         std::vector<Part> parts(s.sizes.begin() + std::ptrdiff_t(base), s.sizes.end());
         s.sizes.resize(base);
@@ -273,8 +280,8 @@ private:
             if (opt_.kind == HierarchyKind::Connectivity) {
                 const size_t offset = sub[c][0].first - node.first;
                 if (childSlack >= 1) {
-                    local.queue = s.queue + offset + c * childSlack, local.tmp = s.tmp + offset + c * childSlack;
-                    local.tmpSlots = s.tmpSlots + 3 * offset, local.slack = childSlack;
+                    local.queue = s.queue + offset + c * childSlack;
+                    local.tmpSlots = s.tmpSlots + 3 * offset + c * childSlack, local.slack = childSlack;
                 } else {
                     local.allocate(sub[c][0].count);
                 }
@@ -347,7 +354,15 @@ private:
         const uint32_t half = k / 2;
         const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
 
-        std::fill(mark_.begin() + lo, mark_.begin() + hi, kOpen);
+        if (n >= kParallelNode) {
+            // In parallel: at the root this is the first write of mark_, whose page faults cost
+            // more than the search.
+            parallelFor(lo, hi, kParallelNode / 4, [&](const tbb::blocked_range<size_t>& r) {
+                std::fill(mark_.begin() + std::ptrdiff_t(r.begin()), mark_.begin() + std::ptrdiff_t(r.end()), kOpen);
+            });
+        } else {
+            std::fill(mark_.begin() + lo, mark_.begin() + hi, kOpen);
+        }
         const uint32_t seed = hint != kNone ? hint : farthest(s, lo, hi);
         // Breadth-first order over the range from the seed; when a component is exhausted, go on
         // from the first unvisited position.
@@ -362,9 +377,10 @@ private:
             if (scan < hi) start = scan;
         }
 
-        // Label the first part kFirst, then find the pieces of the rest, one after another in s.tmp.
+        // Label the first part kFirst, then find the pieces of the rest, one after another in
+        // s.tmpSlots.
         for (uint32_t i = 0; i < n; ++i) mark_[bfs[i]] = i < target ? kFirst : kOpen;
-        uint32_t* pieces = s.tmp;
+        uint32_t* pieces = s.tmpSlots;
         uint32_t pieceEnd = 0;
         s.pieceStart.clear();
         for (uint32_t i = target; i < n; ++i) {
@@ -401,8 +417,8 @@ private:
         // are scattered by it (reading old positions in order, where a gather by new position
         // would read them at random).
         for (uint32_t j = 0; j < n; ++j) mark_[bfs[j]] = lo + j;
-        for (uint32_t p = lo; p < hi; ++p) s.tmp[mark_[p] - lo] = out_.order[p];
-        std::copy(s.tmp, s.tmp + n, out_.order.begin() + lo);
+        for (uint32_t p = lo; p < hi; ++p) s.tmpSlots[mark_[p] - lo] = out_.order[p];
+        std::copy(s.tmpSlots, s.tmpSlots + n, out_.order.begin() + lo);
         if (!posOf_.empty())
             for (uint32_t p = lo; p < hi; ++p) posOf_[out_.order[p]] = p;
         if (needsRows(f, half) || needsRows(n - f, k - half)) {
@@ -464,7 +480,7 @@ private:
     // overflows: posOf_. slots_ and mark_ start unwritten (cullide/unwritten.h; zeroing the
     // arrays of n or 3n entries was 12% of a 1M build).
     Pages<uint32_t> slots_, mark_;
-    Pages<uint32_t> queue_, tmp_, tmpSlots_;  // the root's scratch, sliced for parallel subtrees
+    Pages<uint32_t> queue_, tmpSlots_;  // the root's scratch, sliced for parallel subtrees
     std::vector<uint32_t> overflow_, posOf_;
 };
 
