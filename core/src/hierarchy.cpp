@@ -354,15 +354,9 @@ private:
         const uint32_t half = k / 2;
         const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
 
-        if (n >= kParallelNode) {
-            // In parallel: at the root this is the first write of mark_, whose page faults cost
-            // more than the search.
-            parallelFor(lo, hi, kParallelNode / 4, [&](const tbb::blocked_range<size_t>& r) {
-                std::fill(mark_.begin() + std::ptrdiff_t(r.begin()), mark_.begin() + std::ptrdiff_t(r.end()), kOpen);
-            });
-        } else {
-            std::fill(mark_.begin() + lo, mark_.begin() + hi, kOpen);
-        }
+        // (At the root this is the first write of mark_, whose page faults cost more than the
+        // search.)
+        blocks(lo, hi, [&](uint32_t b, uint32_t e) { std::fill(mark_.begin() + b, mark_.begin() + e, kOpen); });
         const uint32_t seed = hint != kNone ? hint : farthest(s, lo, hi);
         // Breadth-first order over the range from the seed; when a component is exhausted, go on
         // from the first unvisited position.
@@ -415,31 +409,43 @@ private:
 
         // Apply it. mark_ maps each old position to its new one, and the triangle ids and rows
         // are scattered by it (reading old positions in order, where a gather by new position
-        // would read them at random).
-        for (uint32_t j = 0; j < n; ++j) mark_[bfs[j]] = lo + j;
-        for (uint32_t p = lo; p < hi; ++p) s.tmpSlots[mark_[p] - lo] = out_.order[p];
-        std::copy(s.tmpSlots, s.tmpSlots + n, out_.order.begin() + lo);
-        if (!posOf_.empty())
-            for (uint32_t p = lo; p < hi; ++p) posOf_[out_.order[p]] = p;
+        // would read them at random). Each position writes entries of its own, so a large range
+        // is applied in parallel blocks.
+        blocks(lo, hi, [&](uint32_t b, uint32_t e) {
+            for (uint32_t j = b; j < e; ++j) mark_[bfs[j - lo]] = j;
+        });
+        blocks(lo, hi, [&](uint32_t b, uint32_t e) {
+            for (uint32_t p = b; p < e; ++p) s.tmpSlots[mark_[p] - lo] = out_.order[p];
+        });
+        blocks(lo, hi, [&](uint32_t b, uint32_t e) {
+            std::copy(s.tmpSlots + (b - lo), s.tmpSlots + (e - lo), out_.order.begin() + b);
+            if (!posOf_.empty())
+                for (uint32_t p = b; p < e; ++p) posOf_[out_.order[p]] = p;
+        });
         if (needsRows(f, half) || needsRows(n - f, k - half)) {
             // Each half's rows keep the neighbours in that half, in place (the position itself
             // elsewhere).
             const uint32_t mid = lo + f;
-            for (uint32_t p = lo; p < hi; ++p) {
-                const uint32_t np = mark_[p];
-                const uint32_t a = np < mid ? lo : mid, b = np < mid ? mid : hi;
-                const uint32_t* slot = slots_.data() + 3 * size_t(p);
-                uint32_t* out = s.tmpSlots + 3 * size_t(np - lo);
-                if (slot[0] == kEscape) {
-                    std::copy(slot, slot + 3, out);
-                    continue;
+            blocks(lo, hi, [&](uint32_t begin, uint32_t end) {
+                for (uint32_t p = begin; p < end; ++p) {
+                    const uint32_t np = mark_[p];
+                    const uint32_t a = np < mid ? lo : mid, b = np < mid ? mid : hi;
+                    const uint32_t* slot = slots_.data() + 3 * size_t(p);
+                    uint32_t* out = s.tmpSlots + 3 * size_t(np - lo);
+                    if (slot[0] == kEscape) {
+                        std::copy(slot, slot + 3, out);
+                        continue;
+                    }
+                    for (int i = 0; i < 3; ++i) {
+                        const uint32_t q = mark_[slot[i]];
+                        out[i] = q >= a && q < b ? q : np;
+                    }
                 }
-                for (int i = 0; i < 3; ++i) {
-                    const uint32_t q = mark_[slot[i]];
-                    out[i] = q >= a && q < b ? q : np;
-                }
-            }
-            std::copy(s.tmpSlots, s.tmpSlots + 3 * size_t(n), slots_.begin() + 3 * size_t(lo));
+            });
+            blocks(lo, hi, [&](uint32_t b, uint32_t e) {
+                std::copy(s.tmpSlots + 3 * size_t(b - lo), s.tmpSlots + 3 * size_t(e - lo),
+                          slots_.begin() + 3 * size_t(b));
+            });
         }
 
         // Peripheral starts for the halves, for free: the first part is a ball around the seed
@@ -452,8 +458,37 @@ private:
         // of a breadth-first order find the prefix in the same order: each triangle of it is
         // reached from an earlier one), the second when it is one piece (its own search).
         const bool firstSearched = target <= firstComponent && f == target, secondSearched = kept == 1;
+        // Two large halves that are both bisected again are partitioned in parallel (at the top
+        // of the tree there are fewer nodes than threads), each in a slice of the scratch (as
+        // split() slices it for children) and with a stack of its own, the second's parts pushed
+        // after the first's: the same parts in the same order.
+        const size_t g = s.slack / 2;
+        if (n >= kParallelNode && half >= 2 && f >= 2 && n - f >= 2 && g >= 1) {
+            Scratch first, second;
+            first.queue = s.queue, first.tmpSlots = s.tmpSlots, first.slack = g;
+            second.queue = s.queue + f + g, second.tmpSlots = s.tmpSlots + 3 * size_t(f) + g, second.slack = g;
+            parallelForEach(0, 2, [&](size_t i) {
+                if (i == 0) partition(first, lo, lo + f, half, lo + f - 1, firstSearched);
+                else partition(second, lo + f, hi, k - half, hi - 1, secondSearched);
+            });
+            s.sizes.insert(s.sizes.end(), first.sizes.begin(), first.sizes.end());
+            s.sizes.insert(s.sizes.end(), second.sizes.begin(), second.sizes.end());
+            return;
+        }
         partition(s, lo, lo + f, half, lo + f - 1, firstSearched);
         partition(s, lo + f, hi, k - half, hi - 1, secondSearched);
+    }
+
+    // Calls body(b, e) on blocks [b, e) covering [lo, hi): in parallel for a large range, whose
+    // passes would otherwise leave all but one thread idle at the top of the tree.
+    template <class Body>
+    static void blocks(uint32_t lo, uint32_t hi, const Body& body) {
+        if (hi - lo < kParallelNode) {
+            body(lo, hi);
+            return;
+        }
+        parallelFor(lo, hi, kParallelNode / 4,
+                    [&](const tbb::blocked_range<size_t>& r) { body(uint32_t(r.begin()), uint32_t(r.end())); });
     }
 
     // The position of [lo, hi) farthest in hops from `from` (ties: the last reached in
