@@ -81,7 +81,7 @@ struct Part {
 // triangle ids, then rebuilt rows, 3 each: one after another, so they share it), and the small
 // stacks.
 //
-// The three arrays are views: the root's are the build's own arrays (Builder::queue_, ...), and a
+// The two arrays are views: the root's are the build's own (Builder::queue_, tmpSlots_), and a
 // parallel subtree's are a slice of its parent's, not arrays of its own. Fresh pages cost a page
 // fault each on first write, and on the shared build machine's VM a 4 KiB fault costs ~17 us
 // (4 ms per MiB): the subtrees' own scratch (40 MB in 4 KiB-page arrays for 1M triangles) was
@@ -358,8 +358,7 @@ private:
         const uint32_t half = k / 2;
         const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
 
-        // (At the root this is the first write of mark_, whose page faults cost more than the
-        // search.)
+        // (At the root this is also the first write of mark_: the threads share its page faults.)
         blocks(lo, hi, [&](uint32_t b, uint32_t e) { std::fill(mark_.begin() + b, mark_.begin() + e, kOpen); });
         const uint32_t seed = hint != kNone ? hint : farthest(s, lo, hi);
         // Breadth-first order over the range from the seed; when a component is exhausted, go on
