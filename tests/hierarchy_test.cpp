@@ -466,3 +466,24 @@ TEST(Hierarchy, ParallelSubtreesMatchReference) {
                 << "node " << i;
     }
 }
+
+// Parallel subtrees work in slices of their parent's scratch, with slack between siblings (a
+// search writes one past its range). Traps: the slack running out (branching 128 on 80k
+// triangles leaves none: the children must allocate scratch of their own, not slice without
+// slack), and slices of slices (320k triangles: subtrees of subtrees run in parallel, and halves
+// of a partition too) overlapping a sibling's, which would make the build differ from one thread
+// (or race under TSan).
+TEST(Hierarchy, ParallelSubtreesInSlicesOfScratch) {
+    expectSameAsReference(grid(200), {16}, {128}, "grid 200, no slack to slice");
+    const Mesh sheet = grid(400);  // 320k triangles
+    const HierarchyOptions o;
+    const Hierarchy all = buildHierarchy(sheet, o);
+    tbb::task_arena one(1);
+    const Hierarchy single = one.execute([&] { return buildHierarchy(sheet, o); });
+    EXPECT_EQ(all.order, single.order);
+    ASSERT_EQ(all.nodes.size(), single.nodes.size());
+    for (size_t i = 0; i < all.nodes.size(); ++i)
+        EXPECT_TRUE(all.nodes[i].firstChild == single.nodes[i].firstChild &&
+                    all.nodes[i].first == single.nodes[i].first)
+            << "node " << i;
+}

@@ -69,18 +69,37 @@ uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
 template <typename T>
 using Pages = UnwrittenVector<T, true>;
 
-// What one thread's splits write besides the shared arrays, indexed from the start of the range
-// being split: queue (breadth-first order, then the new order), tmp (pieces, then triangle ids),
-// tmpSlots (rebuilt rows, 3 each), and the small stacks.
-struct Scratch {
-    Pages<uint32_t> queue, tmp, tmpSlots;
-    std::vector<uint32_t> sizes, pieceStart;
-    std::vector<uint8_t> moved;
+// A part of a node's partition: its size, and whether its order is a breadth-first order of the
+// whole part from its first position (see partition()).
+struct Part {
+    uint32_t size;
+    bool searched;
+};
 
-    void reserve(uint32_t n) {  // for ranges of up to n positions
-        queue.resize(size_t(n) + 1);  // + 1: a search writes one past its last entry
-        tmp.resize(size_t(n) + 1);
-        if (tmpSlots.size() < 3 * size_t(n)) tmpSlots.resize(3 * size_t(n));  // the root's: the incidence array
+// What one thread's splits write besides the shared arrays, indexed from the start of the range
+// being split: queue (breadth-first order, then the new order), tmpSlots (first the pieces, then
+// triangle ids, then rebuilt rows, 3 each: one after another, so they share it), and the small
+// stacks.
+//
+// The two arrays are views: the root's are the build's own (Builder::queue_, tmpSlots_), and a
+// parallel subtree's are a slice of its parent's, not arrays of its own. Fresh pages cost a page
+// fault each on first write, and on the shared build machine's VM a 4 KiB fault costs ~17 us
+// (4 ms per MiB): the subtrees' own scratch (40 MB in 4 KiB-page arrays for 1M triangles) was
+// about a fifth of a 1M build. The memory is the same: a parent's scratch was freed before its
+// children allocated theirs, as large together.
+// For a range of m positions, queue holds m + slack entries and tmpSlots 3m + slack (a search
+// writes one past its last entry, so slack >= 1, and siblings' slices must not overlap there).
+struct Scratch {
+    uint32_t *queue = nullptr, *tmpSlots = nullptr;
+    size_t slack = 0;
+    std::vector<Part> sizes;
+    std::vector<uint32_t> pieceStart;
+    std::vector<uint8_t> moved;
+    Pages<uint32_t> ownQueue, ownSlots;  // only where the parent's slack ran out
+
+    void allocate(uint32_t n) {  // arrays of its own, for ranges of up to n positions
+        ownQueue.resize(size_t(n) + 1), ownSlots.resize(3 * size_t(n) + 1);
+        queue = ownQueue.data(), tmpSlots = ownSlots.data(), slack = 1;
     }
 };
 
@@ -107,11 +126,16 @@ public:
         if (n <= opt_.leafSize) return;  // a leaf root: no adjacency to build
         if (opt_.kind == HierarchyKind::Connectivity) {
             CULLIDE_CHECK(n < kFirst, "triangle count leaves room for the labels");
-            buildAdjacency();
-            root_.reserve(n);
+            // Slack for a slice per parallel subtree: each level of parallel subtrees divides it
+            // by the branching (a 1M build has two such levels); where it runs out, a subtree
+            // allocates its own scratch.
+            const size_t slack = 1 + n / 1024;
+            queue_.resize(n + slack);
+            buildAdjacency(slack);
             mark_.resize(n);
+            root_.queue = queue_.data(), root_.tmpSlots = tmpSlots_.data(), root_.slack = slack;
         }
-        split(out_.nodes, 0, root_);
+        split(out_.nodes, 0, root_, false);
     }
 
 private:
@@ -128,14 +152,21 @@ private:
     // (a == b) connect nothing. Built from the vertex -> triangle incidence (linear time): the
     // triangles sharing edge (a, b) are among those incident to a. Positions are triangle ids at
     // the root.
-    void buildAdjacency() {
+    //
+    // The incidence array becomes the root's tmpSlots (3n + slack entries), and the vertex starts
+    // live in the root's queue where they fit: both are then written for the first time here, and
+    // their page faults are paid once.
+    void buildAdjacency(size_t slack) {
         const uint32_t n = uint32_t(mesh_.triangles.size());
         const size_t nv = mesh_.positions.size();
-        std::vector<uint32_t> vstart(nv + 1, 0);
+        std::vector<uint32_t> ownStart;
+        if (nv + 1 > queue_.size()) ownStart.resize(nv + 1);
+        const std::span<uint32_t> vstart = ownStart.empty() ? std::span(queue_.data(), nv + 1) : std::span(ownStart);
+        std::fill(vstart.begin(), vstart.end(), 0u);
         for (const Triangle& tri : mesh_.triangles)
             for (uint32_t v : tri) ++vstart[v + 1];
         for (size_t v = 0; v < nv; ++v) vstart[v + 1] += vstart[v];
-        Pages<uint32_t> incident(vstart[nv]);
+        Pages<uint32_t> incident(vstart[nv] + slack);  // vstart[nv] = 3n
         // Fill by advancing each vertex's start to its end, then shift the starts back: no array
         // of cursors.
         for (uint32_t t = 0; t < n; ++t)
@@ -193,7 +224,7 @@ private:
         }
         // Rebuilt rows are written aside, then copied back: the incidence array (3n entries, as
         // many as the slots) serves for that.
-        root_.tmpSlots = std::move(incident);
+        tmpSlots_ = std::move(incident);
     }
 
     // Splits nodes[i] and its descendants, appending them to `nodes` depth first: a node's
@@ -204,16 +235,20 @@ private:
     // their indices shifted: the same nodes, in the same order, as one thread would make. The
     // subtrees' positions are disjoint ranges, so they share the arrays indexed by position or by
     // triangle id (each writes only its own part) and read the overflow rows only.
-    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s) {
+    //
+    // `searched`: the node's order is a breadth-first order of the whole node from its first
+    // position (Part::searched), so that search's farthest position is known: the last one.
+    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s, bool searched) {
         const HierarchyNode node = nodes[i];
         if (node.count <= opt_.leafSize) return;
         const uint32_t k = std::min<uint32_t>(opt_.branching, node.count);
         // s.sizes is a stack: this node's children stay on it while their subtrees push theirs.
         const size_t base = s.sizes.size();
         if (opt_.kind == HierarchyKind::Connectivity) {
-            partition(s, node.first, node.first + node.count, k, kNone);
+            const uint32_t hi = node.first + node.count;
+            partition(s, node.first, hi, k, searched ? hi - 1 : kNone, searched);
         } else {
-            for (uint32_t c = 0; c < k; ++c) s.sizes.push_back(node.count / k + (c < node.count % k ? 1 : 0));
+            for (uint32_t c = 0; c < k; ++c) s.sizes.push_back({node.count / k + (c < node.count % k ? 1 : 0), false});
         }
 
         const uint32_t firstChild = uint32_t(nodes.size());
@@ -222,25 +257,36 @@ private:
         nodes[i].childCount = childCount;
         uint32_t first = node.first;
         for (size_t c = base; c < s.sizes.size(); ++c) {
-            const uint32_t size = s.sizes[c];
+            const uint32_t size = s.sizes[c].size;
             CULLIDE_CHECK(size > 0 && size < node.count, "a child is smaller than its parent and not empty");
             nodes.push_back({first, size, 0, 0, node.depth + 1});
             first += size;
         }
-        s.sizes.resize(base);
         if (node.count < kParallelNode) {
-            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s);
+            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s, s.sizes[base + c].searched);
+            s.sizes.resize(base);
             return;
         }
         // A node this large is the root or a parallel task's own root, so its scratch serves no
-        // later sibling: freed before the children allocate theirs (peak memory).
-        s.queue = {}, s.tmp = {}, s.tmpSlots = {};
+        // later sibling: its children work in slices of it. Child c's slices start c slacks after
+        // its first position's, and hold its range and one slack more: disjoint.
+        const size_t childSlack = s.slack / childCount;
+        std::vector<Part> parts(s.sizes.begin() + std::ptrdiff_t(base), s.sizes.end());
+        s.sizes.resize(base);
         std::vector<std::vector<HierarchyNode>> sub(childCount);
         parallelForEach(0, childCount, [&](size_t c) {
             sub[c] = {nodes[firstChild + c]};
             Scratch local;
-            if (opt_.kind == HierarchyKind::Connectivity) local.reserve(sub[c][0].count);
-            split(sub[c], 0, local);
+            if (opt_.kind == HierarchyKind::Connectivity) {
+                const size_t offset = sub[c][0].first - node.first;
+                if (childSlack >= 1) {
+                    local.queue = s.queue + offset + c * childSlack;
+                    local.tmpSlots = s.tmpSlots + 3 * offset + c * childSlack, local.slack = childSlack;
+                } else {
+                    local.allocate(sub[c][0].count);
+                }
+            }
+            split(sub[c], 0, local, parts[c].searched);
         });
         for (uint32_t c = 0; c < childCount; ++c) {
             // Local index j >= 1 lands at nodes.size() + j - 1; leaves keep firstChild 0.
@@ -273,15 +319,19 @@ private:
     // holds [head, size); returns its new end. Branch-free: whether a neighbour is open is a coin
     // toss the branch predictor loses, so each neighbour is written at the queue's end and kept
     // only if it was open.
+    // The row of the triangle 16 places ahead in the queue is prefetched: near the top of the
+    // tree the rows lie beyond the caches, and the search would wait on each (5-10% of a 1M build).
     uint32_t grow(uint32_t* queue, uint32_t head, uint32_t size, uint32_t lo, uint32_t hi) {
         uint32_t* mark = mark_.data();
-        for (; head < size; ++head)
+        for (; head < size; ++head) {
+            if (head + 16 < size) __builtin_prefetch(slots_.data() + 3 * size_t(queue[head + 16]));
             forNeighbours(queue[head], lo, hi, [&](uint32_t u) {
                 const uint32_t label = mark[u];
                 queue[size] = u;
                 size += label == kOpen;
                 mark[u] = label == kOpen ? kVisited : label;
             });
+        }
         return size;
     }
 
@@ -297,32 +347,37 @@ private:
     // pieces (cut off from its largest piece, so bordered by the first part) move to the first
     // part. Sizes are therefore near-equal, not exact.
     // `hint`: a position on the range's periphery, when the caller knows one (kNone otherwise).
-    void partition(Scratch& s, uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint) {
+    // `searched`: the range's order is a breadth-first order of the whole range from lo (pushed
+    // with its size when the range is a part).
+    void partition(Scratch& s, uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint, bool searched) {
         const uint32_t n = hi - lo;
         if (k < 2 || n < 2) {
-            s.sizes.push_back(n);
+            s.sizes.push_back({n, searched});
             return;
         }
         const uint32_t half = k / 2;
         const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
 
-        std::fill(mark_.begin() + lo, mark_.begin() + hi, kOpen);
+        // (At the root this is also the first write of mark_: the threads share its page faults.)
+        blocks(lo, hi, [&](uint32_t b, uint32_t e) { std::fill(mark_.begin() + b, mark_.begin() + e, kOpen); });
         const uint32_t seed = hint != kNone ? hint : farthest(s, lo, hi);
         // Breadth-first order over the range from the seed; when a component is exhausted, go on
         // from the first unvisited position.
-        uint32_t* bfs = s.queue.data();
-        uint32_t size = 0, scan = lo, start = seed;
+        uint32_t* bfs = s.queue;
+        uint32_t size = 0, scan = lo, start = seed, firstComponent = 0;
         while (size < n) {
             mark_[start] = kVisited;
             bfs[size++] = start;
             size = grow(bfs, size - 1, size, lo, hi);
+            if (firstComponent == 0) firstComponent = size;
             while (scan < hi && mark_[scan] != kOpen) ++scan;
             if (scan < hi) start = scan;
         }
 
-        // Label the first part kFirst, then find the pieces of the rest, one after another in s.tmp.
+        // Label the first part kFirst, then find the pieces of the rest, one after another in
+        // s.tmpSlots.
         for (uint32_t i = 0; i < n; ++i) mark_[bfs[i]] = i < target ? kFirst : kOpen;
-        uint32_t* pieces = s.tmp.data();
+        uint32_t* pieces = s.tmpSlots;
         uint32_t pieceEnd = 0;
         s.pieceStart.clear();
         for (uint32_t i = target; i < n; ++i) {
@@ -341,7 +396,7 @@ private:
 
         // The new order, in bfs: the first part (its prefix is in place), then the second.
         s.moved.assign(pieceCount, 0);
-        uint32_t f = target;
+        uint32_t f = target, kept = uint32_t(pieceCount);
         for (size_t p = 0; p < pieceCount; ++p) {
             if (p == largest) continue;  // stays in the second part whatever it touches
             bool touchesFirst = false;
@@ -349,6 +404,7 @@ private:
                 forNeighbours(pieces[i], lo, hi, [&](uint32_t u) { touchesFirst |= mark_[u] == kFirst; });
             if (!touchesFirst) continue;
             s.moved[p] = 1;
+            --kept;
             f = uint32_t(std::copy(pieces + s.pieceStart[p], pieces + s.pieceStart[p + 1], bfs + f) - bfs);
         }
         for (size_t p = 0, e = f; p < pieceCount; ++p)
@@ -356,44 +412,92 @@ private:
 
         // Apply it. mark_ maps each old position to its new one, and the triangle ids and rows
         // are scattered by it (reading old positions in order, where a gather by new position
-        // would read them at random).
-        for (uint32_t j = 0; j < n; ++j) mark_[bfs[j]] = lo + j;
-        for (uint32_t p = lo; p < hi; ++p) s.tmp[mark_[p] - lo] = out_.order[p];
-        std::copy(s.tmp.begin(), s.tmp.begin() + n, out_.order.begin() + lo);
-        if (!posOf_.empty())
-            for (uint32_t p = lo; p < hi; ++p) posOf_[out_.order[p]] = p;
+        // would read them at random). Each position writes entries of its own, so a large range
+        // is applied in parallel blocks.
+        blocks(lo, hi, [&](uint32_t b, uint32_t e) {
+            for (uint32_t j = b; j < e; ++j) mark_[bfs[j - lo]] = j;
+        });
+        blocks(lo, hi, [&](uint32_t b, uint32_t e) {
+            for (uint32_t p = b; p < e; ++p) s.tmpSlots[mark_[p] - lo] = out_.order[p];
+        });
+        blocks(lo, hi, [&](uint32_t b, uint32_t e) {
+            std::copy(s.tmpSlots + (b - lo), s.tmpSlots + (e - lo), out_.order.begin() + b);
+            if (!posOf_.empty())
+                for (uint32_t p = b; p < e; ++p) posOf_[out_.order[p]] = p;
+        });
         if (needsRows(f, half) || needsRows(n - f, k - half)) {
             // Each half's rows keep the neighbours in that half, in place (the position itself
             // elsewhere).
             const uint32_t mid = lo + f;
-            for (uint32_t p = lo; p < hi; ++p) {
-                const uint32_t np = mark_[p];
-                const uint32_t a = np < mid ? lo : mid, b = np < mid ? mid : hi;
-                const uint32_t* slot = slots_.data() + 3 * size_t(p);
-                uint32_t* out = s.tmpSlots.data() + 3 * size_t(np - lo);
-                if (slot[0] == kEscape) {
-                    std::copy(slot, slot + 3, out);
-                    continue;
+            blocks(lo, hi, [&](uint32_t begin, uint32_t end) {
+                for (uint32_t p = begin; p < end; ++p) {
+                    const uint32_t np = mark_[p];
+                    const uint32_t a = np < mid ? lo : mid, b = np < mid ? mid : hi;
+                    const uint32_t* slot = slots_.data() + 3 * size_t(p);
+                    uint32_t* out = s.tmpSlots + 3 * size_t(np - lo);
+                    if (slot[0] == kEscape) {
+                        std::copy(slot, slot + 3, out);
+                        continue;
+                    }
+                    for (int i = 0; i < 3; ++i) {
+                        const uint32_t q = mark_[slot[i]];
+                        out[i] = q >= a && q < b ? q : np;
+                    }
                 }
-                for (int i = 0; i < 3; ++i) {
-                    const uint32_t q = mark_[slot[i]];
-                    out[i] = q >= a && q < b ? q : np;
-                }
-            }
-            std::copy(s.tmpSlots.begin(), s.tmpSlots.begin() + 3 * size_t(n), slots_.begin() + 3 * size_t(lo));
+            });
+            blocks(lo, hi, [&](uint32_t b, uint32_t e) {
+                std::copy(s.tmpSlots + 3 * size_t(b - lo), s.tmpSlots + 3 * size_t(e - lo),
+                          slots_.begin() + 3 * size_t(b));
+            });
         }
 
         // Peripheral starts for the halves, for free: the first part is a ball around the seed
         // whose last-reached triangle lies on its rim; the second part's first triangle borders
         // the first part. (The second part is a breadth-first order too, so its rim is its end.)
-        partition(s, lo, lo + f, half, lo + f - 1);
-        partition(s, lo + f, hi, k - half, hi - 1);
+        //
+        // Which halves are breadth-first orders of themselves from their first position, for the
+        // nodes they may become (split() then needs no search for a peripheral start): the first
+        // part when it is a prefix of the seed's search alone (the searches restricted to a prefix
+        // of a breadth-first order find the prefix in the same order: each triangle of it is
+        // reached from an earlier one), the second when it is one piece (its own search).
+        const bool firstSearched = target <= firstComponent && f == target, secondSearched = kept == 1;
+        // Two large halves that are both bisected again are partitioned in parallel (at the top
+        // of the tree there are fewer nodes than threads), each in a slice of the scratch (as
+        // split() slices it for children) and with a stack of its own, the second's parts pushed
+        // after the first's: the same parts in the same order.
+        const size_t g = s.slack / 2;
+        if (n >= kParallelNode && half >= 2 && f >= 2 && n - f >= 2 && g >= 1) {
+            Scratch first, second;
+            first.queue = s.queue, first.tmpSlots = s.tmpSlots, first.slack = g;
+            second.queue = s.queue + f + g, second.tmpSlots = s.tmpSlots + 3 * size_t(f) + g, second.slack = g;
+            parallelForEach(0, 2, [&](size_t i) {
+                if (i == 0) partition(first, lo, lo + f, half, lo + f - 1, firstSearched);
+                else partition(second, lo + f, hi, k - half, hi - 1, secondSearched);
+            });
+            s.sizes.insert(s.sizes.end(), first.sizes.begin(), first.sizes.end());
+            s.sizes.insert(s.sizes.end(), second.sizes.begin(), second.sizes.end());
+            return;
+        }
+        partition(s, lo, lo + f, half, lo + f - 1, firstSearched);
+        partition(s, lo + f, hi, k - half, hi - 1, secondSearched);
+    }
+
+    // Calls body(b, e) on blocks [b, e) covering [lo, hi): in parallel for a large range, whose
+    // passes would otherwise leave all but one thread idle at the top of the tree.
+    template <class Body>
+    static void blocks(uint32_t lo, uint32_t hi, const Body& body) {
+        if (hi - lo < kParallelNode) {
+            body(lo, hi);
+            return;
+        }
+        parallelFor(lo, hi, kParallelNode / 4,
+                    [&](const tbb::blocked_range<size_t>& r) { body(uint32_t(r.begin()), uint32_t(r.end())); });
     }
 
     // The position of [lo, hi) farthest in hops from `from` (ties: the last reached in
     // breadth-first order). Expects the range labelled kOpen and leaves it so.
     uint32_t farthest(Scratch& s, uint32_t from, uint32_t hi) {
-        uint32_t* queue = s.queue.data();
+        uint32_t* queue = s.queue;
         queue[0] = from;
         mark_[from] = kVisited;
         const uint32_t size = grow(queue, 0, 1, from, hi);  // from is the range's first position
@@ -414,6 +518,7 @@ private:
     // overflows: posOf_. slots_ and mark_ start unwritten (cullide/unwritten.h; zeroing the
     // arrays of n or 3n entries was 12% of a 1M build).
     Pages<uint32_t> slots_, mark_;
+    Pages<uint32_t> queue_, tmpSlots_;  // the root's scratch, sliced for parallel subtrees
     std::vector<uint32_t> overflow_, posOf_;
 };
 
