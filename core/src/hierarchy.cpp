@@ -12,6 +12,7 @@
 #include "cullide/unwritten.h"
 
 #include <algorithm>
+#include <atomic>
 #include <limits>
 #include <random>
 #include <span>
@@ -310,7 +311,11 @@ private:
             return;
         }
         for (uint32_t i = slot[1]; i < slot[1] + slot[2]; ++i) {
-            const uint32_t q = posOf_[overflow_[i]];
+            // Relaxed: the neighbour may lie in a range another thread is renumbering (parallel
+            // halves or subtrees); its old and new positions are both outside [lo, hi), so either
+            // value gives the same test, but the read must not be a data race.
+            const uint32_t q =
+                std::atomic_ref<uint32_t>(const_cast<uint32_t&>(posOf_[overflow_[i]])).load(std::memory_order_relaxed);
             if (q >= lo && q < hi) f(q);
         }
     }
@@ -423,7 +428,8 @@ private:
         blocks(lo, hi, [&](uint32_t b, uint32_t e) {
             std::copy(s.tmpSlots + (b - lo), s.tmpSlots + (e - lo), out_.order.begin() + b);
             if (!posOf_.empty())
-                for (uint32_t p = b; p < e; ++p) posOf_[out_.order[p]] = p;
+                for (uint32_t p = b; p < e; ++p)  // read concurrently by forNeighbours of other ranges
+                    std::atomic_ref<uint32_t>(posOf_[out_.order[p]]).store(p, std::memory_order_relaxed);
         });
         if (needsRows(f, half) || needsRows(n - f, k - half)) {
             // Each half's rows keep the neighbours in that half, in place (the position itself
