@@ -118,9 +118,10 @@ void relayoutSpilled(RecordSet<Rec>& set) {
 // Sets up the triangles of set.chunks, in parallel over chunks: `setupOne(t, scratch, emit,
 // reserve)` calls emit(make) for each record of triangle t, make(record) filling it in place (and
 // saying whether to keep it), and returns its TriFlags (`scratch`, a Scratch per task). Records go
-// straight to their chunk's slot (records.h), sized by `countRange(lo, hi)`, the sum of a cheap guess of triangle
-// t's records: a guess too high leaves unused slots, one too low makes the chunk spill; the
-// records are the same either way. Then they are binned to tiles.
+// straight to their chunk's slot (records.h), sized by `countRange(lo, hi)`, the sum over the
+// chunk's triangles of a cheap guess of their records: a guess too high leaves unused slots, one
+// too low makes the chunk spill; the records are the same either way. Then they are binned to
+// tiles.
 // Deferred records, for setup in batches: reserve() hands out the next record and its tile
 // rectangle in the slot, to be filled later ({null, null} when the slot is full or spilled); every
 // reserved record must be filled before the next emit (which may move the slot's records) and
@@ -131,8 +132,8 @@ struct Reserved {
     TileRect* tiles;
 };
 
-template <typename Scratch, typename Rec, typename CountOne, typename SetupOne, typename FinishChunk>
-void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const CountOne& countRange,
+template <typename Scratch, typename Rec, typename CountRange, typename SetupOne, typename FinishChunk>
+void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const CountRange& countRange,
                   const SetupOne& setupOne, const FinishChunk& finishChunk) {
     if (set.flags.size() < triangles) {
         set.flags.resize(triangles);
@@ -314,7 +315,6 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     // to hold a centre; kHintClip, the clipping path; otherwise no record, and the flags are
     // already the triangle's own (rejected, or zero area, or neither: no centre in its box), from
     // the snapped vertices alone (setupUnclipped's verdict: trivialReject by the vertices' sides).
-    // kHintCw goes with kHintOne: the snapped triangle is clockwise.
     std::vector<uint8_t>& hint = out.flags;  // sized by buildRecords before it counts
     auto countOne = [&](uint32_t t) -> uint32_t {
         const Triangle& tri = in.triangles[t];
@@ -328,7 +328,7 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
         return 0;
     };
     // Eight at a time where the CPU allows: the same hints and counts.
-    const bool batched = in.simd && haveInsideEdgeTri4();
+    const bool batched = in.simd && haveSetupAvx2();
     auto countRange = [&](uint32_t lo, uint32_t hi) -> size_t {
         size_t n = 0;
         uint32_t t = lo;

@@ -281,7 +281,7 @@ void setupInsideEdgeTri(const WinVertex& v0, const WinVertex& v1, const WinVerte
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 
-bool haveInsideEdgeTri4() {
+bool haveSetupAvx2() {
     return __builtin_cpu_supports("avx2");
 }
 
@@ -388,7 +388,7 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
 
 #else
 
-bool haveInsideEdgeTri4() {
+bool haveSetupAvx2() {
     return false;
 }
 

@@ -112,10 +112,11 @@ struct InsideBatch {
     alignas(16) int32_t clockwise[4];  // -1 when clockwise, else 0
 };
 
-// Whether setupInsideEdgeTri4 runs on this CPU (AVX2).
-bool haveInsideEdgeTri4();
+// Whether this CPU runs the AVX2 setup (setupInsideEdgeTri4, and the count pass's eight-wide
+// form in records.cpp).
+bool haveSetupAvx2();
 
-// setupInsideEdgeTri on the four triangles of `batch` at once with AVX2 (haveInsideEdgeTri4()):
+// setupInsideEdgeTri on the four triangles of `batch` at once with AVX2 (haveSetupAvx2()):
 // the same integer and double operations in the same order (no FMA), so the same four records
 // bit for bit. A lane whose depth plane needs planeFrom's fallback is set up by the scalar step.
 void setupInsideEdgeTri4(const InsideBatch& batch, const SetupParams& params, EdgeTri* const out[4]);
