@@ -16,6 +16,10 @@
 #include <memory>
 #include <stdexcept>
 
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
+
 namespace cullide::oracle::detail {
 namespace {
 
@@ -288,9 +292,22 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     // the axes on which the cell is the box's lower corner's cell: a pair's owner cell (the
     // larger lower cell on each axis, cell() being monotone) is this cell iff on every axis one
     // of the two starts here.
+    // The corners as 4 floats each (the 4th 0 in both), so that a pair's six comparisons are two
+    // 4-wide ones where SSE is there (the pair loop was a sixth of the oracle on small meshes).
     struct Entry {
-        Box box;
+        float lo[4], hi[4];
         uint32_t g, low;  // low: bit k when the box's lower corner is in this cell along k
+    };
+    // Whether a and b overlap (closed boxes).
+    auto overlapping = [](const Entry& a, const Entry& b) -> bool {
+#if defined(__SSE__)
+        const __m128 le0 = _mm_cmple_ps(_mm_loadu_ps(a.lo), _mm_loadu_ps(b.hi));
+        const __m128 le1 = _mm_cmple_ps(_mm_loadu_ps(b.lo), _mm_loadu_ps(a.hi));
+        return _mm_movemask_ps(_mm_and_ps(le0, le1)) == 15;
+#else
+        return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) & (b.lo[1] <= a.hi[1]) &
+            (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
+#endif
     };
     times.buildSeconds = seconds(t0);
 
@@ -319,7 +336,11 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
             packed.resize(e);
             for (size_t i = 0; i < e; ++i) {
                 const uint32_t g = uint32_t(entries[cellFirst + i]) & kIndexMask;
-                packed[i] = {boxes[g], g, uint32_t(entries[cellFirst + i] >> 29) & 7};
+                const Box& b = boxes[g];
+                packed[i] = {{b.lo[0], b.lo[1], b.lo[2], 0},
+                             {b.hi[0], b.hi[1], b.hi[2], 0},
+                             g,
+                             uint32_t(entries[cellFirst + i] >> 29) & 7};
             }
             for (size_t i = 0; i + 1 < e; ++i) {
                 const Entry& ea = packed[i];
@@ -328,10 +349,7 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
                     if (count + (to - from) > kBatch) flush();  // room for every pair of the chunk
                     for (size_t j = from; j < to; ++j) {
                         const Entry& eb = packed[j];
-                        const bool hit = ((ea.low | eb.low) == 7) & (ea.box.lo[0] <= eb.box.hi[0]) &
-                            (eb.box.lo[0] <= ea.box.hi[0]) & (ea.box.lo[1] <= eb.box.hi[1]) &
-                            (eb.box.lo[1] <= ea.box.hi[1]) & (ea.box.lo[2] <= eb.box.hi[2]) &
-                            (eb.box.lo[2] <= ea.box.hi[2]);
+                        const bool hit = ((ea.low | eb.low) == 7) & overlapping(ea, eb);
                         hits[count] = {ea.g, eb.g};
                         count += hit;
                     }
