@@ -73,8 +73,16 @@ void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
     const Prim* last = nullptr;  // the grid hands over runs of pairs with the same first primitive
     detail::Plane plane;
     const bool stored = ctx.storedPlanes;
+    // The second record (and plane) of the pair kAhead on are fetched ahead: they are random
+    // reads, whose misses were a quarter of the narrow phase's time on a 46k mesh.
+    constexpr uint32_t kAhead = 8;
     for (uint32_t k = 0; k < count; ++k) {
         const Candidate& c = pairs[k];
+        if (k + kAhead < count) {
+            const Candidate& f = pairs[k + kAhead];
+            __builtin_prefetch(&ctx.objects[f.object1].prims[f.prim1]);
+            if (stored) __builtin_prefetch(&ctx.objects[f.object1].planes[f.prim1]);
+        }
         // The broad phase reports each unordered pair once (the filter is for one reporting
         // both orders); primitives are in spatial order, so order the triangles for the output.
         if (c.object0 > c.object1 || (c.object0 == c.object1 && c.prim0 >= c.prim1)) continue;
