@@ -46,7 +46,7 @@ struct ObjectData {
     Buffer<detail::Plane> planes;  // one per primitive on small scenes (kStoredPlanes), else empty
 };
 
-// Up to this many primitives in all, their planes are computed once in the setup (48 bytes each)
+// Up to this many triangles in the scene, the planes are computed once in the setup (48 bytes each)
 // rather than per pair that needs them (6% of the oracle on a 6k mesh); beyond, the memory
 // counts more.
 constexpr size_t kStoredPlanes = size_t(1) << 18;
