@@ -294,6 +294,32 @@ TEST(OracleBroadPhase, GridMatchesEmbreeOnManyCells) {
     EXPECT_EQ(g.pairs, e.pairs);
 }
 
+// Trap: up to 2^18 cells the grid takes another path, one counting sort by cell of the entries
+// generated once: a dense cluster (cells straddling the walk's blocks), boxes set aside and two
+// objects must still give exactly Embree's candidate pairs and truth there too.
+TEST(OracleBroadPhase, GridMatchesEmbreeOnFewCells) {
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<float> u(0, 1);
+    std::vector<Mesh> meshes(2);
+    auto add = [&](Mesh& m, const Vec3f& c, float size) {
+        const uint32_t base = uint32_t(m.positions.size());
+        for (int k = 0; k < 3; ++k)
+            m.positions.push_back(c + size * Vec3f(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
+        m.triangles.push_back({base, base + 1, base + 2});
+    };
+    for (int t = 0; t < 3000; ++t) add(meshes[t % 2], Vec3f(u(rng), u(rng), u(rng)), 0.05f);  // ~20k cells
+    for (int t = 0; t < 1500; ++t)  // a dense cluster
+        add(meshes[t % 2], Vec3f(0.5f, 0.5f, 0.5f) + 0.01f * Vec3f(u(rng), u(rng), u(rng)), 0.01f);
+    for (int t = 0; t < 4; ++t) add(meshes[t % 2], Vec3f(u(rng), u(rng), u(rng)), 0.7f);  // set aside
+    const Scene scene = sceneOf(meshes);
+    OracleOptions grid, embree;
+    embree.broadPhase = BroadPhase::Embree;
+    const Truth g = findIntersections(scene, grid), e = findIntersections(scene, embree);
+    EXPECT_GT(g.pairs.size(), 10000u);
+    EXPECT_EQ(g.candidatePairs, e.candidatePairs);
+    EXPECT_EQ(g.pairs, e.pairs);
+}
+
 // Bad input is refused before it reaches Embree (which would drop it silently).
 TEST(Oracle, RefusesNonFiniteAndHugeCoordinates) {
     Mesh m = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}});

@@ -41,17 +41,21 @@ inline int planeSide(const Prim& a, const Plane& pa, double x, double y, double 
     const double det = wx * pa.n[0] + wy * pa.n[1] + wz * pa.n[2];
     const double permanent = std::abs(wx) * pa.perm[0] + std::abs(wy) * pa.perm[1] + std::abs(wz) * pa.perm[2];
     const double bound = kOrient3dErrBound * permanent;
-    return det > bound ? 1 : -det > bound ? -1 : 0;
+    // Without branches: the sign is unpredictable (a fifth of the oracle's time on mispredicted
+    // jumps here).
+    return int(det > bound) - int(-det > bound);
 }
 
-// Sign of orient3d(a's corners, b's corner k) when the filter cannot tell: a's integer normal
-// (|N| < 2^61) when b's corner is an integer in a's unit (|w| < 2^63: the dot product fits 126
-// bits), then orient3d.
+// Sign of orient3d(a's corners, b's corner k) when the filter cannot tell: when a's corners are
+// integers of one unit 2^unit below 2^62 with edges below 2^30 units, a's integer normal
+// (|N| < 2^61) when b's corner is an integer in that unit (|w| < 2^63: the dot product fits 126
+// bits), then orient3d. The unit is found here, not stored per record: few pairs get here (none
+// on most meshes), and finding it for every triangle was 5% of the oracle on a 6k mesh.
 [[gnu::noinline]] int exactSideSlow(const Prim& a, const Prim& b, int k) {
-    if (a.unit != kNoUnit) {
-        const double scale = unitScale(a.unit);
-        int64_t u[3], v[3];
-        integerEdges(a, a.unit, u, v);  // within 2^30 units: setUnit checked
+    const int32_t unit = integerUnit(&a.p[0][0], 9);
+    int64_t u[3], v[3];
+    if (unit != kNoUnit && integerEdges(a, unit, u, v)) {
+        const double scale = unitScale(unit);
         const int64_t ni[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
         __int128 det = 0;
         bool exact = true;
@@ -97,29 +101,21 @@ Plane planeOf(const Prim& prim) {
     return pl;
 }
 
-void setUnit(Prim& prim) {
-    prim.unit = kNoUnit;
-    const int32_t unit = integerUnit(&prim.p[0][0], 9);
-    if (unit == kNoUnit) return;
-    int64_t u[3], v[3];
-    if (integerEdges(prim, unit, u, v)) prim.unit = unit;  // |normal components| < 2^61
-}
-
-Contact primContact(const Prim& a, const Plane& planeA, const Prim& b, bool sameMesh) {
+Contact primContact(const Prim& a, const Plane& planeA, const Prim& b, const Plane* storedB, bool sameMesh) {
     // b's plane is computed only past the first rejection.
     // Shared vertex ids, without branches (which neighbour shares what is unpredictable): bit
     // 3i + j when a's corner i is b's corner j. The corners of a kept triangle are distinct ids,
     // so each bit is a different corner on both sides.
-    int shared = 0, sa[3] = {0, 0, 0}, sb[3] = {0, 0, 0};
-    if (sameMesh) {
-        uint32_t mask = 0;
+    uint32_t mask = 0;
+    if (sameMesh)
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) mask |= uint32_t(a.v[i] == b.v[j]) << (3 * i + j);
-        for (; mask != 0 && shared < 3; mask &= mask - 1, ++shared) {
-            const int bit = std::countr_zero(mask);
-            sa[shared] = bit / 3, sb[shared] = bit % 3;
-        }
-    }
+    // The first two shared corners, without a loop (its trip count mispredicted: a tenth of the
+    // oracle's time); bit 9 stands in when there are fewer (its corners then unused).
+    const uint32_t rest = mask & (mask - 1);  // (std::popcount is a libgcc call on baseline x86-64)
+    const int shared = int(mask != 0) + int(rest != 0) + int((rest & (rest - 1)) != 0);
+    const int bit0 = std::countr_zero(mask | 1u << 9), bit1 = std::countr_zero(rest | 1u << 9);
+    const int sa[2] = {bit0 / 3, bit1 / 3}, sb[2] = {bit0 % 3, bit1 % 3};
     if (shared == 2) {
         // Not a fold-over unless b's opposite corner is on a's plane (faceContact's first test);
         // then the two opposite corners strictly on one side of the edge (its second).
@@ -136,7 +132,7 @@ Contact primContact(const Prim& a, const Plane& planeA, const Prim& b, bool same
         const int b1 = (sb[0] + 1) % 3, b2 = (sb[0] + 2) % 3, a1 = (sa[0] + 1) % 3, a2 = (sa[0] + 2) % 3;
         const int s1 = exactSide(a, planeA, b, b1), s2 = exactSide(a, planeA, b, b2);
         if (s1 == s2 && s1 != 0) return Contact::None;
-        const Plane planeB = planeOf(b);
+        const Plane planeB = storedB ? *storedB : planeOf(b);
         const int t1 = exactSide(b, planeB, a, a1), t2 = exactSide(b, planeB, a, a2);
         if (t1 == t2 && t1 != 0) return Contact::None;
         // Coplanar (b's other corners exactly on a's plane, hence all six points): they meet
@@ -169,7 +165,7 @@ Contact primContact(const Prim& a, const Plane& planeA, const Prim& b, bool same
         int db[3], da[3];
         for (int k = 0; k < 3; ++k) db[k] = exactSide(a, planeA, b, k);
         if (db[0] == db[1] && db[1] == db[2] && db[0] != 0) return Contact::None;
-        const Plane planeB = planeOf(b);
+        const Plane planeB = storedB ? *storedB : planeOf(b);
         for (int k = 0; k < 3; ++k) da[k] = exactSide(b, planeB, a, k);
         if (da[0] == da[1] && da[1] == da[2] && da[0] != 0) return Contact::None;
         const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)}, pb{corner(b, 0), corner(b, 1), corner(b, 2)};

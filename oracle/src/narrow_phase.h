@@ -1,10 +1,11 @@
 // The oracle's narrow phase on packed primitive records (internal to oracle/).
 //
-// A record holds a triangle's float corners, its vertex ids for the sharing rules and the unit
-// of its corners' integer form (64 bytes, one cache line: 64 MB on a 1M-triangle mesh, where the
-// 128-byte record with the plane stored took 128). The narrow phase computes each triangle's
-// plane as Shewchuk's orient3d does (the cross product of the two edges from corner 0 and, per
-// component, the sum of the absolute products: the permanent's factors) when a pair needs it.
+// A record holds a triangle's float corners and its vertex ids for the sharing rules (64 bytes,
+// one cache line: 64 MB on a 1M-triangle mesh, where the 128-byte record with the plane stored
+// took 128). Each triangle's plane is computed as Shewchuk's orient3d does (the cross product of
+// the two edges from corner 0 and, per component, the sum of the absolute products: the
+// permanent's factors): on small scenes once per triangle in the setup (oracle.cpp, beside the
+// records), on large ones when a pair needs it.
 // The sign of a point against that plane is then one dot product, trusted when it exceeds
 // Shewchuk's static bound (the same arithmetic as orient3d's float filter); only unsure signs
 // take the exact path.
@@ -22,8 +23,6 @@ struct alignas(64) Prim {
     float p[3][3];  // world corners (float; exact in double)
     Triangle v;  // vertex ids for the sharing rules (welded when asked)
     uint32_t triangle;  // index in the object's mesh
-    int32_t unit;  // the corners' coordinates are integers times 2^unit below 2^62 (the lowest
-                   // set bit among them), the edges below 2^30 of it; kNoUnit otherwise
 };
 static_assert(sizeof(Prim) == 64);
 
@@ -35,14 +34,11 @@ struct Plane {
 };
 Plane planeOf(const Prim& prim);
 
-// Sets unit from p (p, v, triangle set by the caller).
-void setUnit(Prim& prim);
-
-// The narrow phase of one candidate pair (planeA = planeOf(a): the broad phase hands over runs
-// of pairs with the same a, which then share it) (faceContact's answer, exactly): by the shared vertex
+// The narrow phase of one candidate pair (planeA = planeOf(a); storedB = &planeOf(b) where stored,
+// null to compute it here when needed) (faceContact's answer, exactly): by the shared vertex
 // ids, the exact signs of each triangle's corners against the other's plane (filter first, then
 // integer arithmetic), which reject most pairs; a shared vertex then takes one more orientation,
 // other pairs Guigue-Devillers on those signs; faceContact only for the rare rest.
-Contact primContact(const Prim& a, const Plane& planeA, const Prim& b, bool sameMesh);
+Contact primContact(const Prim& a, const Plane& planeA, const Prim& b, const Plane* storedB, bool sameMesh);
 
 }  // namespace cullide::oracle::detail
