@@ -501,6 +501,49 @@ TEST(Cullide, DeterministicAcrossThreadsAndRuns) {
     EXPECT_FALSE(one.pcs.empty());
 }
 
+// Trap: recordPrunes' log is read instead of onPass's PCS after every call (the study's
+// attribution of false prunes). A log that missed a call's dropped nodes, took a kept node for a
+// dropped one, or numbered the calls differently would blame the wrong call. Against the PCS each
+// call leaves (onPass), for all three methods, fitted and clustered views.
+TEST(Cullide, RecordedPrunesMatchThePcsAfterEachCall) {
+    const Scene s = sceneOf({{icosphere(3), rotation(0.2, 0.3, 0.1)},
+                             {icosphere(3), rotation(0.5, 0.1, 0.3, Vec3f(1.2f, 0.3f, 0.2f))},
+                             {selfCrossingRibbon(81), rotation(0.31, 0.47, 0.23, Vec3f(0.5f, 0, 0))}});
+    std::vector<size_t> offset{0};
+    for (const Object& o : s.objects) offset.push_back(offset.back() + o.mesh.triangleCount());
+    auto backend = raster::makeCpuBackend();
+    for (CullMethod method : {CullMethod::Original, CullMethod::Modified, CullMethod::Reliable})
+        for (ViewMode views : {ViewMode::Fit, ViewMode::Clustered}) {
+            CullideOptions o;
+            o.method = method;
+            o.views = views;
+            o.width = o.height = 128;
+            o.hierarchy.leafSize = 4;
+            o.recordPrunes = true;
+            std::vector<uint32_t> expected(offset.back(), CullideResult::kNotPruned);
+            std::vector<char> in(offset.back(), 1);
+            uint32_t call = 0;
+            o.onPass = [&](const PassStats&, std::span<const PcsTriangle> pcs) {
+                std::vector<char> next(in.size(), 0);
+                for (const PcsTriangle& p : pcs) next[offset[p.object] + p.triangle] = 1;
+                for (size_t g = 0; g < in.size(); ++g)
+                    if (in[g] && !next[g]) expected[g] = call;
+                in.swap(next);
+                ++call;
+            };
+            const CullideResult r = runCullide(s, *backend, o);
+            const std::string what = std::string(toString(method)) + (views == ViewMode::Fit ? " fit" : " clustered");
+            EXPECT_EQ(r.prunedAtCall, expected) << what;
+            EXPECT_EQ(call, r.passes.size()) << what;
+            size_t kept = 0, pruned = 0;
+            for (uint32_t c : r.prunedAtCall) (c == CullideResult::kNotPruned ? kept : pruned) += 1;
+            EXPECT_EQ(kept, r.pcs.size()) << what;
+            EXPECT_GT(pruned, 0u) << what;
+        }
+    CullideOptions plain;  // without recordPrunes: no log
+    EXPECT_TRUE(runCullide(s, *backend, plain).prunedAtCall.empty());
+}
+
 // Trap: adaptive resolution that depends on the thread count (a median or a sum gathered in
 // whatever order the threads finish) would give a different view, hence a different PCS, per
 // thread count. Same scene with --resolution auto: the same PCS, per-call viewports and counts.

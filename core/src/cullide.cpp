@@ -579,6 +579,16 @@ public:
         const auto start = Clock::now();
         CullideResult result;
         build(result);
+        if (opt_.recordPrunes) {
+            sceneOffset_.assign(hierarchies_.size() + 1, 0);
+            keptMark_.resize(hierarchies_.size());
+            for (size_t i = 0; i < hierarchies_.size(); ++i) {
+                sceneOffset_[i + 1] = sceneOffset_[i] + hierarchies_[i]->order.size();
+                keptMark_[i].assign(hierarchies_[i]->nodes.size(), 0);
+            }
+            result.prunedAtCall.assign(sceneOffset_.back(), CullideResult::kNotPruned);
+            prunedAt_ = &result.prunedAtCall;
+        }
 
         std::vector<Item> pcs;
         if (opt_.method == CullMethod::Reliable) {
@@ -1075,6 +1085,23 @@ private:
         return stays;
     }
 
+    // options.recordPrunes: the triangles of the nodes in `pcs` but not in `kept` (a subset of
+    // its nodes) were pruned by call `call`.
+    void recordPrunes(const std::vector<Item>& pcs, const std::vector<Item>& kept, uint32_t call) {
+        for (const Item& it : kept) keptMark_[it.object][it.node] = 1;
+        for (const Item& it : pcs) {
+            uint8_t& mark = keptMark_[it.object][it.node];
+            if (mark) {
+                mark = 0;  // cleared for the next call
+                continue;
+            }
+            const Hierarchy& h = *hierarchies_[it.object];
+            const HierarchyNode& n = node(it);
+            uint32_t* const at = prunedAt_->data() + sceneOffset_[it.object];
+            for (uint32_t k = n.first; k < n.first + n.count; ++k) at[h.order[k]] = call;
+        }
+    }
+
     // The statistics of one reducePCS call from `pcs` to `kept` (its views' totals, views_),
     // appended to `passes` and reported to onPass and onPassStats. Returns `kept`.
     std::vector<Item> finishCall(const std::vector<Item>& pcs, std::vector<Item> kept, uint32_t level, uint32_t d,
@@ -1101,11 +1128,18 @@ private:
         st.tiles = views_.tiles;
         st.round = round_;
         st.seconds = secondsSince(start);
+        if (prunedAt_) recordPrunes(pcs, kept, uint32_t(passes.size()));
         passes.push_back(st);
         if (opt_.onPass) opt_.onPass(st, expand(kept));
         if (opt_.onPassStats) opt_.onPassStats(st);
         return kept;
     }
+
+    // options.recordPrunes: result.prunedAtCall, each object's first triangle in it, and a mark
+    // per node (all clear between calls).
+    std::vector<uint32_t>* prunedAt_ = nullptr;
+    std::vector<size_t> sceneOffset_;
+    std::vector<std::vector<uint8_t>> keptMark_;
 
     const Scene& scene_;
     DepthBackend& backend_;

@@ -259,6 +259,9 @@ struct CullideOptions {
     // build. Empty: every run builds its hierarchies, as the paper does.
     std::shared_ptr<HierarchyCache> hierarchyCache;
     ExactSwitch exactSwitch;
+    // Fills CullideResult::prunedAtCall: which call pruned each triangle. Costs a write per pruned
+    // triangle over the run (not a PCS expansion per call, as onPass does).
+    bool recordPrunes = false;
     // Throws InputError naming the option on absurd values (no directions, a zero or non-finite
     // direction, a viewport outside 1..kMaxViewportSide, an adaptive K outside (0, kMaxAutoCoverage]
     // or a budget smaller than width x height, an exact switch below 1 triangle).
@@ -277,6 +280,11 @@ struct CullideResult {
     int32_t switchedAtLevel = -1;
     size_t switchedAtTriangles = 0;
     double predictedLevelSeconds = 0, predictedExactSeconds = 0;
+    // With options.recordPrunes: per triangle of the scene (objects in order, each object's
+    // triangles in order), the index in `passes` of the call that pruned it, or kNotPruned (still
+    // in the PCS). Empty otherwise.
+    static constexpr uint32_t kNotPruned = UINT32_MAX;
+    std::vector<uint32_t> prunedAtCall;
 };
 
 // Computes the PCS of `scene` with `backend`. Throws InputError on bad options, and

@@ -3,11 +3,14 @@
 
 #include "polygon.h"
 
+#include "cullide/error.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <map>
+#include <set>
 
 namespace cullide::study {
 
@@ -181,45 +184,47 @@ constexpr uint32_t kNever = std::numeric_limits<uint32_t>::max();
 
 Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth, DepthBackend& backend,
                                  const CullideOptions& options) {
-    // The scene as one geometry in (object, triangle) order, as fitView needs it.
+    CullideOptions o = options;
+    o.recordPrunes = true;
+    CullideResult run = runCullide(scene, backend, o);
+    return attributeFalsePrunes(scene, truth, backend, options, std::move(run));
+}
+
+Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth, DepthBackend& backend,
+                                 const CullideOptions& options, CullideResult run) {
+    // The scene as one geometry in (object, triangle) order, as fitView needs it; the order of
+    // CullideResult::prunedAtCall too.
     const FlatScene world = flatten(scene);
     const size_t total = world.mesh.triangles.size();
     auto global = [&](uint32_t object, uint32_t triangle) { return world.triangle(object, triangle); };
+    CULLIDE_CHECK(run.prunedAtCall.size() == total, "attributeFalsePrunes needs a run with recordPrunes");
+    static_assert(CullideResult::kNotPruned == kNever);
 
     std::vector<char> colliding(total, 0);
     for (const oracle::IntersectingPair& p : truth.pairs)
         colliding[global(p.objectA, p.triangleA)] = colliding[global(p.objectB, p.triangleB)] = 1;
-
-    std::vector<uint32_t> prunedAt(total, kNever);
-    std::vector<char> inPcs(total, 1), next(total, 0);
-    std::map<uint32_t, OrthoView> views;  // per call that dropped a colliding triangle
+    std::vector<uint32_t> prunedAt(total, kNever);  // of the colliding triangles
+    std::set<uint32_t> calls;  // that dropped a colliding triangle
+    for (size_t g = 0; g < total; ++g)
+        if (colliding[g] && run.prunedAtCall[g] != kNever) calls.insert(prunedAt[g] = run.prunedAtCall[g]);
+    // Each such call's view: its own direction and viewport (with chosen directions, not
+    // options.directions), fitted to the triangles still in the PCS before it.
+    std::map<uint32_t, OrthoView> views;
     std::map<uint32_t, uint32_t> directionOf;
-    uint32_t call = 0;
-    CullideOptions o = options;
-    o.onPass = [&](const PassStats& st, std::span<const PcsTriangle> pcs) {
-        std::fill(next.begin(), next.end(), 0);
-        for (const PcsTriangle& p : pcs) next[global(p.object, p.triangle)] = 1;
-        bool dropped = false;
+    for (uint32_t c : calls) {
+        std::vector<TriangleRange> ranges;
         for (size_t g = 0; g < total; ++g)
-            if (colliding[g] && inPcs[g] && !next[g]) prunedAt[g] = call, dropped = true;
-        if (dropped) {
-            std::vector<TriangleRange> ranges;
-            for (size_t g = 0; g < total; ++g)
-                if (inPcs[g]) {
-                    if (!ranges.empty() && ranges.back().first + ranges.back().count == g) ++ranges.back().count;
-                    else ranges.push_back({uint32_t(g), 1});
-                }
-            // The call's own direction and viewport (with chosen directions, not options.directions).
-            views[call] = fitView(world.mesh.positions, world.mesh.triangles, ranges, st.dirVector, st.width, st.height,
-                                  options.depth);
-            directionOf[call] = st.direction;
-        }
-        inPcs.swap(next);
-        ++call;
-        if (options.onPass) options.onPass(st, pcs);
-    };
+            if (run.prunedAtCall[g] >= c) {
+                if (!ranges.empty() && ranges.back().first + ranges.back().count == g) ++ranges.back().count;
+                else ranges.push_back({uint32_t(g), 1});
+            }
+        const PassStats& st = run.passes.at(c);
+        views[c] = fitView(world.mesh.positions, world.mesh.triangles, ranges, st.dirVector, st.width, st.height,
+                           options.depth);
+        directionOf[c] = st.direction;
+    }
     Attribution a;
-    a.result = runCullide(scene, backend, o);
+    a.result = std::move(run);
 
     auto corners = [&](uint32_t object, uint32_t triangle) {
         const Mesh& m = world.mesh;

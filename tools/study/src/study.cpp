@@ -307,6 +307,9 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
             // Auto: a fresh cost model per run, so that every timed run pays for its calibration.
             CullideOptions o = options;
             if (o.exactSwitch.kind == ExactSwitchKind::Auto) o.exactSwitch.exactCost = exactStageCostModel(scene);
+            // Which call pruned each triangle, for the attribution of false prunes to explain this
+            // very run (a write per pruned triangle: nothing measurable beside the run).
+            o.recordPrunes = truth != nullptr;
             const auto start = Clock::now();
             CullideResult r = runCullide(scene, backend, o);
             timed.emplace_back(secondsSince(start), std::move(r));
@@ -369,22 +372,10 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
         const PcsReport rep = measurePcs(scene, *truth, r.pcs, options);
         const auto start = Clock::now();
         Attribution a;
-        // Auto's switch depends on timings: the instrumented run replays the timed run's decision
-        // (AtLevel: where it stopped, or never), so that it computes the same PCS and its false
-        // prunes stay explained.
-        CullideOptions replay = options;
-        if (options.exactSwitch.kind == ExactSwitchKind::Auto) {
-            replay.exactSwitch = {};
-            if (r.switchedAtLevel >= 0) {
-                replay.exactSwitch.kind = ExactSwitchKind::AtLevel;
-                replay.exactSwitch.level =
-                    options.method == CullMethod::Reliable ? r.passes.back().round + 1 : uint32_t(r.switchedAtLevel);
-            }
-        }
-        executeIn(*arena, [&] { a = attributeFalsePrunes(scene, *truth, backend, replay); });
+        // The median timed run itself is explained, from the calls that pruned its triangles (so
+        // an auto switch, which depends on timings, needs no replay).
+        executeIn(*arena, [&] { a = attributeFalsePrunes(scene, *truth, backend, options, r); });
         j["attribution_ms"] = 1e3 * secondsSince(start);
-        // The instrumented run must be the run that was timed (determinism): otherwise every
-        // false prune is unexplained.
         const bool same = a.result.pcs == r.pcs;
         const size_t missed = rep.missedPairs[0] + rep.missedPairs[1];
         size_t attributedPairs = 0, attributedTriangles = 0;

@@ -90,13 +90,17 @@ struct Attribution {
     std::array<size_t, kCauseCount> triangles{};  // false-pruned triangles by cause
     std::array<size_t, kCauseCount> pairs{};  // missed pairs by cause
     std::vector<MissedPairCause> missed;  // sorted by pair
-    CullideResult result;  // the instrumented run (same PCS as any other)
+    CullideResult result;  // the run explained (with its prunedAtCall)
 };
 
-// Runs Cullide once with an observer that records, per reducePCS call, which colliding triangles
-// it dropped and the view it used, then judges every missed pair of `truth` (findIntersections of
-// `scene`). `backend` is used for the run and for the pair renders.
+// Runs Cullide once with CullideOptions::recordPrunes (which call pruned each triangle), then
+// judges every missed pair of `truth` (findIntersections of `scene`) in the view of the call that
+// pruned it. `backend` is used for the run and for the pair renders.
 Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth, DepthBackend& backend,
                                  const CullideOptions& options);
+// The same for a run already made (with `options` and recordPrunes: its prunedAtCall is read), so
+// that a study explains the run it timed without running again.
+Attribution attributeFalsePrunes(const Scene& scene, const oracle::Truth& truth, DepthBackend& backend,
+                                 const CullideOptions& options, CullideResult run);
 
 }  // namespace cullide::study
