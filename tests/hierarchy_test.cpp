@@ -221,6 +221,20 @@ private:
     Hierarchy h_;
 };
 
+// Expects the default hierarchy of `m` built on every thread to equal the one built on one.
+void expectSameWithOneThread(const Mesh& m) {
+    const HierarchyOptions o;
+    const Hierarchy all = buildHierarchy(m, o);
+    tbb::task_arena one(1);
+    const Hierarchy single = one.execute([&] { return buildHierarchy(m, o); });
+    EXPECT_EQ(all.order, single.order);
+    ASSERT_EQ(all.nodes.size(), single.nodes.size());
+    for (size_t i = 0; i < all.nodes.size(); ++i)
+        EXPECT_TRUE(all.nodes[i].firstChild == single.nodes[i].firstChild &&
+                    all.nodes[i].first == single.nodes[i].first)
+            << "node " << i;
+}
+
 // Expects buildHierarchy's connectivity hierarchy to equal the reference's for every leaf size
 // and branching given.
 void expectSameAsReference(const Mesh& m, std::initializer_list<uint32_t> leafSizes,
@@ -454,16 +468,7 @@ TEST(Hierarchy, ParallelSubtreesMatchReference) {
     for (const Mesh* m : {&pool, &sheet}) {
         ASSERT_GE(m->triangles.size(), size_t(1) << 16);
         expectSameAsReference(*m, {16}, {2, 4}, m == &pool ? "pool 30000" : "grid 200");
-        const HierarchyOptions o;
-        const Hierarchy all = buildHierarchy(*m, o);
-        tbb::task_arena one(1);
-        const Hierarchy single = one.execute([&] { return buildHierarchy(*m, o); });
-        EXPECT_EQ(all.order, single.order);
-        ASSERT_EQ(all.nodes.size(), single.nodes.size());
-        for (size_t i = 0; i < all.nodes.size(); ++i)
-            EXPECT_TRUE(all.nodes[i].firstChild == single.nodes[i].firstChild &&
-                        all.nodes[i].first == single.nodes[i].first)
-                << "node " << i;
+        expectSameWithOneThread(*m);
     }
 }
 
@@ -475,15 +480,5 @@ TEST(Hierarchy, ParallelSubtreesMatchReference) {
 // (or race under TSan).
 TEST(Hierarchy, ParallelSubtreesInSlicesOfScratch) {
     expectSameAsReference(grid(200), {16}, {128}, "grid 200, no slack to slice");
-    const Mesh sheet = grid(400);  // 320k triangles
-    const HierarchyOptions o;
-    const Hierarchy all = buildHierarchy(sheet, o);
-    tbb::task_arena one(1);
-    const Hierarchy single = one.execute([&] { return buildHierarchy(sheet, o); });
-    EXPECT_EQ(all.order, single.order);
-    ASSERT_EQ(all.nodes.size(), single.nodes.size());
-    for (size_t i = 0; i < all.nodes.size(); ++i)
-        EXPECT_TRUE(all.nodes[i].firstChild == single.nodes[i].firstChild &&
-                    all.nodes[i].first == single.nodes[i].first)
-            << "node " << i;
+    expectSameWithOneThread(grid(400));  // 320k triangles
 }

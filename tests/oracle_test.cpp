@@ -266,25 +266,23 @@ TEST(OracleBroadPhase, RadixSortIsStableOnTheKey) {
             }
 }
 
-// Trap: the grid's entries are written straight into their top-digit buckets and its cells are
-// walked per fixed block of entries: a cell that straddles a block boundary (a dense cluster
-// puts thousands of entries in one cell), small and large buckets, a key over 16 bits (many
-// cells), boxes set aside (over 64 cells) and two objects must still give exactly Embree's
-// candidate pairs and truth.
-TEST(OracleBroadPhase, GridMatchesEmbreeOnManyCells) {
-    std::mt19937 rng(11);
+// Random small triangles of two objects for the grid broad phase against Embree: `scattered` of
+// size `size` over the unit cube, `cluster` in a dense cluster at its centre (size 0.01), four of
+// size `aside` (large: set aside by the grid). Expects the same candidate pairs and truth.
+void expectGridMatchesEmbree(uint32_t seed, int scattered, float size, int cluster, float aside) {
+    std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(0, 1);
     std::vector<Mesh> meshes(2);
-    auto add = [&](Mesh& m, const Vec3f& c, float size) {
+    auto add = [&](Mesh& m, const Vec3f& c, float side) {
         const uint32_t base = uint32_t(m.positions.size());
         for (int k = 0; k < 3; ++k)
-            m.positions.push_back(c + size * Vec3f(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
+            m.positions.push_back(c + side * Vec3f(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
         m.triangles.push_back({base, base + 1, base + 2});
     };
-    for (int t = 0; t < 20000; ++t) add(meshes[t % 2], Vec3f(u(rng), u(rng), u(rng)), 0.01f);  // scattered
-    for (int t = 0; t < 2500; ++t)  // a dense cluster
+    for (int t = 0; t < scattered; ++t) add(meshes[t % 2], Vec3f(u(rng), u(rng), u(rng)), size);
+    for (int t = 0; t < cluster; ++t)
         add(meshes[t % 2], Vec3f(0.5f, 0.5f, 0.5f) + 0.01f * Vec3f(u(rng), u(rng), u(rng)), 0.01f);
-    for (int t = 0; t < 4; ++t) add(meshes[t % 2], Vec3f(u(rng), u(rng), u(rng)), 0.5f);  // set aside
+    for (int t = 0; t < 4; ++t) add(meshes[t % 2], Vec3f(u(rng), u(rng), u(rng)), aside);
     const Scene scene = sceneOf(meshes);
     OracleOptions grid, embree;
     embree.broadPhase = BroadPhase::Embree;
@@ -294,30 +292,20 @@ TEST(OracleBroadPhase, GridMatchesEmbreeOnManyCells) {
     EXPECT_EQ(g.pairs, e.pairs);
 }
 
+// Trap: the grid's entries are written straight into their top-digit buckets and its cells are
+// walked per fixed block of entries: a cell that straddles a block boundary (a dense cluster
+// puts thousands of entries in one cell), small and large buckets, a key over 16 bits (many
+// cells), boxes set aside (over 64 cells) and two objects must still give exactly Embree's
+// candidate pairs and truth.
+TEST(OracleBroadPhase, GridMatchesEmbreeOnManyCells) {
+    expectGridMatchesEmbree(11, 20000, 0.01f, 2500, 0.5f);
+}
+
 // Trap: up to 2^18 cells the grid takes another path, one counting sort by cell of the entries
 // generated once: a dense cluster (cells straddling the walk's blocks), boxes set aside and two
 // objects must still give exactly Embree's candidate pairs and truth there too.
 TEST(OracleBroadPhase, GridMatchesEmbreeOnFewCells) {
-    std::mt19937 rng(12);
-    std::uniform_real_distribution<float> u(0, 1);
-    std::vector<Mesh> meshes(2);
-    auto add = [&](Mesh& m, const Vec3f& c, float size) {
-        const uint32_t base = uint32_t(m.positions.size());
-        for (int k = 0; k < 3; ++k)
-            m.positions.push_back(c + size * Vec3f(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
-        m.triangles.push_back({base, base + 1, base + 2});
-    };
-    for (int t = 0; t < 3000; ++t) add(meshes[t % 2], Vec3f(u(rng), u(rng), u(rng)), 0.05f);  // ~20k cells
-    for (int t = 0; t < 1500; ++t)  // a dense cluster
-        add(meshes[t % 2], Vec3f(0.5f, 0.5f, 0.5f) + 0.01f * Vec3f(u(rng), u(rng), u(rng)), 0.01f);
-    for (int t = 0; t < 4; ++t) add(meshes[t % 2], Vec3f(u(rng), u(rng), u(rng)), 0.7f);  // set aside
-    const Scene scene = sceneOf(meshes);
-    OracleOptions grid, embree;
-    embree.broadPhase = BroadPhase::Embree;
-    const Truth g = findIntersections(scene, grid), e = findIntersections(scene, embree);
-    EXPECT_GT(g.pairs.size(), 10000u);
-    EXPECT_EQ(g.candidatePairs, e.candidatePairs);
-    EXPECT_EQ(g.pairs, e.pairs);
+    expectGridMatchesEmbree(12, 3000, 0.05f, 1500, 0.7f);  // ~20k cells
 }
 
 // Bad input is refused before it reaches Embree (which would drop it silently).
