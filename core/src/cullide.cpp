@@ -1090,16 +1090,13 @@ private:
     void recordPrunes(const std::vector<Item>& pcs, const std::vector<Item>& kept, uint32_t call) {
         for (const Item& it : kept) keptMark_[it.object][it.node] = 1;
         for (const Item& it : pcs) {
-            uint8_t& mark = keptMark_[it.object][it.node];
-            if (mark) {
-                mark = 0;  // cleared for the next call
-                continue;
-            }
+            if (keptMark_[it.object][it.node]) continue;
             const Hierarchy& h = *hierarchies_[it.object];
             const HierarchyNode& n = node(it);
             uint32_t* const at = prunedAt_->data() + sceneOffset_[it.object];
             for (uint32_t k = n.first; k < n.first + n.count; ++k) at[h.order[k]] = call;
         }
+        for (const Item& it : kept) keptMark_[it.object][it.node] = 0;  // clear for the next call
     }
 
     // The statistics of one reducePCS call from `pcs` to `kept` (its views' totals, views_),
