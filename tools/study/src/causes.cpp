@@ -70,8 +70,8 @@ PairSample samplePair(DepthBackend& backend, const std::array<Vec3f, 3>& t, cons
     // Only the pixels that may hold a fragment of t or x are drawn and read: a tile of the view
     // (the same fragments at its pixels as the whole view's) around both. A covered centre i + 1/2
     // lies in the snapped triangle, whose corners are within half a pixel of the window ones, so
-    // within [floor(min) - 1, floor(max)] of them; the box has a pixel more on each side. (Was the
-    // whole view, three times per pair: most of the study's time in its cause attribution.)
+    // within [floor(min) - 1, floor(max)] of them; the box has a pixel more on each side. (The
+    // whole view, drawn and read three times per pair, was most of the attribution's time.)
     int x0 = 0, y0 = 0, x1 = view.width - 1, y1 = view.height - 1;
     double lo[2] = {wt[0].x(), wt[0].y()}, hi[2] = {lo[0], lo[1]};
     for (const Vec3d& w : {wt[1], wt[2], wx[0], wx[1], wx[2]})
