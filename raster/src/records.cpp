@@ -305,7 +305,7 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     drawnChunks(list, Command::Op::Draw, out);
     SetupParams params = in.params;
     params.dropEmpty = true;
-    // The guess: what setupUnclipped gives a triangle whose vertices need no clipping (0 or 1
+    // The guess: what setupTriangle gives a triangle whose vertices need no clipping (0 or 1
     // record), 1 for the others (clipped ones with more spill). For vertices inside the clip
     // volume trivialReject adds nothing: they are finite with depths in [0, 1], and three beyond
     // one side of the viewport snap to a box that holds no centre; so the count reads the snapped
@@ -314,15 +314,15 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     // triangle's flags, which the setup then overwrites): kHintOne, one record, whose box is known
     // to hold a centre; kHintClip, the clipping path; otherwise no record, and the flags are
     // already the triangle's own (rejected, or zero area, or neither: no centre in its box), from
-    // the snapped vertices alone (setupUnclipped's verdict: trivialReject by the vertices' sides).
+    // the snapped vertices alone (setupTriangle's verdict: trivialReject by the vertices' sides).
     std::vector<uint8_t>& hint = out.flags;  // sized by buildRecords before it counts
     auto countOne = [&](uint32_t t) -> uint32_t {
         const Triangle& tri = in.triangles[t];
         const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
         if (!(s0.inside && s1.inside && s2.inside)) return hint[t] = kHintClip, 1;
         const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
-        const int64_t area2 = (sx[1] - sx[0]) * (sy[2] - sy[0]) - (sx[2] - sx[0]) * (sy[1] - sy[0]);
-        const bool area = area2 != 0;  // snappedHasArea
+        const int64_t area2 = snappedArea2(sx, sy);
+        const bool area = area2 != 0;
         if (area && boxHoldsCentre(sx, sy, params)) return hint[t] = uint8_t(kHintOne | (area2 < 0 ? kHintCw : 0)), 1;
         hint[t] = (s0.beyond & s1.beyond & s2.beyond) != 0 ? kRejected : area ? 0 : kZeroArea;
         return 0;

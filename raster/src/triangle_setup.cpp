@@ -100,13 +100,11 @@ int fanPolygon(const WinVertex* poly, int n, const int64_t* sx, const int64_t* s
     int havePlane = -1;
     for (int k = 1; k + 1 < n; ++k) {
         int i0 = 0, i1 = k, i2 = k + 1;
-        const int64_t area2 = (sx[i1] - sx[i0]) * (sy[i2] - sy[i0]) - (sx[i2] - sx[i0]) * (sy[i1] - sy[i0]);
+        const int64_t tx[3] = {sx[i0], sx[i1], sx[i2]}, ty[3] = {sy[i0], sy[i1], sy[i2]};
+        const int64_t area2 = snappedArea2(tx, ty);
         if (area2 == 0) continue;  // zero area after snapping: no fragment (counted by the caller)
         ++nonZero;
-        if (params.dropEmpty) {
-            const int64_t tx[3] = {sx[i0], sx[i1], sx[i2]}, ty[3] = {sy[i0], sy[i1], sy[i2]};
-            if (!boxHoldsCentre(tx, ty, params)) continue;
-        }
+        if (params.dropEmpty && !boxHoldsCentre(tx, ty, params)) continue;
         if (havePlane < 0) havePlane = planeFrom(v0, v1, v2, plane) ? 1 : 0;
         if (area2 < 0) std::swap(i1, i2);  // both windings rasterize
         SnappedTri& t = out[count++];
@@ -150,26 +148,33 @@ inline int64_t max3(int64_t a, int64_t b, int64_t c) {
     return ab > c ? ab : c;
 }
 
+inline int64_t floorShift(int64_t v, int s) {
+    return v >> s;
+}  // floor(v / 2^s), arithmetic shift
+inline int64_t ceilShift(int64_t v, int s) {
+    return -((-v) >> s);
+}  // ceil(v / 2^s)
+
+// The pixels whose centres i*2^S + half lie within the snapped triangle's bounding box, clipped to
+// the viewport: [i0, i1] x [j0, j1], empty when i0 > i1 or j0 > j1. The AVX2 forms (countHints8 in
+// records.cpp, setupInsideEdgeTri4) compute the same in 32-bit lanes.
+struct PixelBox {
+    int64_t i0, i1, j0, j1;
+};
+inline PixelBox pixelBox(const int64_t x[3], const int64_t y[3], const SetupParams& params) {
+    const int S = params.subpixelBits;
+    const int64_t half = int64_t(1) << (S - 1);
+    return {std::max<int64_t>(ceilShift(min3(x[0], x[1], x[2]) - half, S), 0),
+            std::min<int64_t>(floorShift(max3(x[0], x[1], x[2]) - half, S), params.width - 1),
+            std::max<int64_t>(ceilShift(min3(y[0], y[1], y[2]) - half, S), 0),
+            std::min<int64_t>(floorShift(max3(y[0], y[1], y[2]) - half, S), params.height - 1)};
+}
+
 }  // namespace
 
 bool boxHoldsCentre(const int64_t sx[3], const int64_t sy[3], const SetupParams& params) {
-    // A centre i*2^S + half within [min, max] in x and in y, inside the viewport.
-    const int S = params.subpixelBits;
-    const int64_t half = int64_t(1) << (S - 1);
-    const int64_t minx = min3(sx[0], sx[1], sx[2]), maxx = max3(sx[0], sx[1], sx[2]);
-    const int64_t miny = min3(sy[0], sy[1], sy[2]), maxy = max3(sy[0], sy[1], sy[2]);
-    const int64_t lox = std::max<int64_t>(-((half - minx) >> S), 0);
-    const int64_t hix = std::min<int64_t>((maxx - half) >> S, params.width - 1);
-    const int64_t loy = std::max<int64_t>(-((half - miny) >> S), 0);
-    const int64_t hiy = std::min<int64_t>((maxy - half) >> S, params.height - 1);
-    return lox <= hix && loy <= hiy;
-}
-
-uint8_t setupUnclipped(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],
-                       const int64_t sy[3], const SetupParams& params, SnappedTri out[kMaxSubTriangles], int& count) {
-    count = 0;
-    const WinVertex poly[3] = {v0, v1, v2};
-    return fanPolygon(poly, 3, sx, sy, v0, v1, v2, params, out, count) == 0 ? kZeroArea : 0;
+    const PixelBox box = pixelBox(sx, sy, params);
+    return box.i0 <= box.i1 && box.j0 <= box.j1;
 }
 
 uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params,
@@ -180,7 +185,8 @@ uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex&
     if (insideClipVolume(v0, params) && insideClipVolume(v1, params) && insideClipVolume(v2, params)) {
         const int64_t sx[3] = {snapToFixed(v0.x, S), snapToFixed(v1.x, S), snapToFixed(v2.x, S)};
         const int64_t sy[3] = {snapToFixed(v0.y, S), snapToFixed(v1.y, S), snapToFixed(v2.y, S)};
-        return setupUnclipped(v0, v1, v2, sx, sy, params, out, count);
+        const WinVertex poly[3] = {v0, v1, v2};
+        return fanPolygon(poly, 3, sx, sy, v0, v1, v2, params, out, count) == 0 ? kZeroArea : 0;
     }
 
     // Clipping against the depth range and the guard band.
@@ -208,32 +214,15 @@ uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex&
     return kClipped | (fanPolygon(poly, n, sx, sy, v0, v1, v2, params, out, count) == 0 ? kZeroArea : 0);
 }
 
-namespace {
-
-inline int64_t floorShift(int64_t v, int s) {
-    return v >> s;
-}  // floor(v / 2^s), arithmetic shift
-inline int64_t ceilShift(int64_t v, int s) {
-    return -((-v) >> s);
-}  // ceil(v / 2^s)
-
-}  // namespace
-
 bool makeEdgeTri(const SnappedTri& t, const SetupParams& params, EdgeTri& out) {
     const int S = params.subpixelBits;
-    const int64_t one = int64_t(1) << S, half = one >> 1;
-    // Bounding box of the covered centres: centre i*2^S + half within [min, max].
-    const int64_t minx = min3(t.x[0], t.x[1], t.x[2]), maxx = max3(t.x[0], t.x[1], t.x[2]);
-    const int64_t miny = min3(t.y[0], t.y[1], t.y[2]), maxy = max3(t.y[0], t.y[1], t.y[2]);
-    const int64_t i0 = std::max<int64_t>(ceilShift(minx - half, S), 0);
-    const int64_t i1 = std::min<int64_t>(floorShift(maxx - half, S), params.width - 1);
-    const int64_t j0 = std::max<int64_t>(ceilShift(miny - half, S), 0);
-    const int64_t j1 = std::min<int64_t>(floorShift(maxy - half, S), params.height - 1);
-    if (i0 > i1 || j0 > j1) return false;
-    out.x0 = uint16_t(i0);
-    out.x1 = uint16_t(i1);
-    out.y0 = uint16_t(j0);
-    out.y1 = uint16_t(j1);
+    const int64_t half = int64_t(1) << (S - 1);
+    const PixelBox box = pixelBox(t.x, t.y, params);
+    if (box.i0 > box.i1 || box.j0 > box.j1) return false;
+    out.x0 = uint16_t(box.i0);
+    out.x1 = uint16_t(box.i1);
+    out.y0 = uint16_t(box.j0);
+    out.y1 = uint16_t(box.j1);
     for (int k = 0; k < 3; ++k) {
         const int n = (k + 1) % 3;
         const int64_t dx = t.x[n] - t.x[k], dy = t.y[n] - t.y[k];
@@ -257,18 +246,17 @@ void setupInsideEdgeTri(const WinVertex& v0, const WinVertex& v1, const WinVerte
     const int64_t x[3] = {sx[0], clockwise ? sx[2] : sx[1], clockwise ? sx[1] : sx[2]};
     const int64_t y[3] = {sy[0], clockwise ? sy[2] : sy[1], clockwise ? sy[1] : sy[2]};
     // makeEdgeTri's box, known to hold a centre.
-    out.x0 = uint16_t(std::max<int64_t>(ceilShift(min3(x[0], x[1], x[2]) - half, S), 0));
-    out.x1 = uint16_t(std::min<int64_t>(floorShift(max3(x[0], x[1], x[2]) - half, S), params.width - 1));
-    out.y0 = uint16_t(std::max<int64_t>(ceilShift(min3(y[0], y[1], y[2]) - half, S), 0));
-    out.y1 = uint16_t(std::min<int64_t>(floorShift(max3(y[0], y[1], y[2]) - half, S), params.height - 1));
+    const PixelBox box = pixelBox(x, y, params);
+    out.x0 = uint16_t(box.i0);
+    out.x1 = uint16_t(box.i1);
+    out.y0 = uint16_t(box.j0);
+    out.y1 = uint16_t(box.j1);
     // makeEdgeTri's edges. Inside the clip volume |x|, |y| <= 2^kGuardBandFixedBits = 2^29, so the
-    // differences fit 32 bits without its check. The fill rule as arithmetic, not branches on the
-    // signs (which are data: mispredicted half the time).
-    const bool bottomLeft = params.fillRule == FillRule::BottomLeft;
+    // differences fit 32 bits without its check.
     for (int k = 0; k < 3; ++k) {
         const int n = k == 2 ? 0 : k + 1;
         const int64_t dx = x[n] - x[k], dy = y[n] - y[k];
-        const int64_t exclusive = int64_t(!(dy < 0) & !((dy == 0) & (bottomLeft ? dx > 0 : dx < 0)));
+        const int64_t exclusive = int64_t(!isInclusiveEdge(params.fillRule, dx, dy));
         out.a[k] = int32_t(-dy);
         out.b[k] = int32_t(dx);
         out.c[k] = floorShift(dx * (half - y[k]) - dy * (half - x[k]) - exclusive, S);

@@ -57,9 +57,10 @@ inline constexpr int kMaxSubTriangles = 7;
 uint8_t setupTriangle(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params,
                       SnappedTri out[kMaxSubTriangles], int& count);
 
-// The pieces of setupTriangle, for a caller that snaps each vertex once (the fast path):
-// setupTriangle(v) == kRejected if trivialReject(v); else, when every vertex is
-// insideClipVolume, setupUnclipped(v, snapped x, snapped y); else the clipping path.
+// The tests setupTriangle makes first, for a caller that snaps each vertex once (the fast path):
+// setupTriangle(v) == kRejected if trivialReject(v); when every vertex is insideClipVolume, no
+// clipping happens and the one sub-triangle is the snapped triangle itself, dropped when its
+// snappedArea2 is zero or its box holds no centre (boxHoldsCentre).
 bool trivialReject(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const SetupParams& params);
 // The sides of the viewport a vertex lies beyond (kBeyond*): trivialReject rejects three vertices
 // beyond one common side.
@@ -69,14 +70,13 @@ inline uint8_t beyondSides(const WinVertex& v, const SetupParams& params) {
                    (v.y < 0 ? kBeyondBottom : 0) | (v.y > double(params.height) ? kBeyondTop : 0));
 }
 bool insideClipVolume(const WinVertex& v, const SetupParams& params);
-// Whether the snapped triangle has non-zero area (orientation), and whether its bounding box
-// holds a pixel centre of the viewport: the tests by which setup drops a sub-triangle.
-inline bool snappedHasArea(const int64_t sx[3], const int64_t sy[3]) {
-    return (sx[1] - sx[0]) * (sy[2] - sy[0]) - (sx[2] - sx[0]) * (sy[1] - sy[0]) != 0;
+// Twice the signed area of the snapped triangle (positive counter-clockwise), and whether its
+// bounding box holds a pixel centre of the viewport: the tests by which setup drops a
+// sub-triangle. Snapped coordinates inside the guard band are below 2^30, so the products fit.
+inline int64_t snappedArea2(const int64_t sx[3], const int64_t sy[3]) {
+    return (sx[1] - sx[0]) * (sy[2] - sy[0]) - (sx[2] - sx[0]) * (sy[1] - sy[0]);
 }
 bool boxHoldsCentre(const int64_t sx[3], const int64_t sy[3], const SetupParams& params);
-uint8_t setupUnclipped(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],
-                       const int64_t sy[3], const SetupParams& params, SnappedTri out[kMaxSubTriangles], int& count);
 
 // The fast path's form of a snapped triangle: edge functions over pixel indices,
 // E_k(i, j) = a[k]*i + b[k]*j + c[k], with the fill rule folded into c so that the centre of
@@ -98,9 +98,9 @@ static_assert(sizeof(EdgeTri) == 96);
 // viewport.
 bool makeEdgeTri(const SnappedTri& t, const SetupParams& params, EdgeTri& out);
 
-// setupUnclipped and makeEdgeTri of its one sub-triangle, fused, for the fast path's common case: a
-// triangle whose vertices are all insideClipVolume, whose snapped area2 (the orientation
-// determinant of snappedHasArea) is non-zero, and whose box holds a pixel centre (boxHoldsCentre).
+// setupTriangle and makeEdgeTri of its one sub-triangle, fused, for the fast path's common case: a
+// triangle whose vertices are all insideClipVolume, whose snappedArea2 is non-zero, and whose box
+// holds a pixel centre (boxHoldsCentre).
 // The same record, bit for bit, without the sub-triangle in between.
 void setupInsideEdgeTri(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],
                         const int64_t sy[3], bool clockwise, const SetupParams& params, EdgeTri& out);

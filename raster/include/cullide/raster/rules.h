@@ -150,10 +150,11 @@ inline int64_t snapToFixed(double v, int subpixelBits) {
 // inclusive. (dx, dy) = b - a in fixed point. The interior normal is (-dy, dx): a left edge has
 // -dy > 0; a horizontal edge (dy == 0) is a bottom edge when the interior is above (dx > 0) and a
 // top edge when it is below (dx < 0).
+// Written as bit operations, not branches: setup calls it per edge, and the signs are data
+// (a branch on them is mispredicted about half the time).
 constexpr bool isInclusiveEdge(FillRule rule, int64_t dx, int64_t dy) {
-    if (dy < 0) return true;  // left edge
-    if (dy > 0) return false;  // right edge
-    return rule == FillRule::BottomLeft ? dx > 0 : dx < 0;
+    const bool along = rule == FillRule::BottomLeft ? dx > 0 : dx < 0;  // the rule is fixed per draw
+    return (dy < 0) | ((dy == 0) & along);  // a left edge, or a bottom (top) horizontal one
 }
 
 // Rule 6 (last step): clamp to [0,1]; NaN and -0 become +0.
