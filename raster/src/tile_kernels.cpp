@@ -396,10 +396,10 @@ void runTile(const TileJob& job, size_t tile, FragCache& cache, TileOut& out) {
             table.replay[size_t(e.func)](cache.groups.data() + seen.start, cache.groups.data() + seen.stop, depth,
                                          e.mask, out.fragments, out.passed);
         } else {
-            // Rasterize and record, while the groups fit.
+            // Rasterize, and record while the groups fit when a later draw will replay them.
             FragGroup* const groups = cache.groups.data();
             FragGroup* w = groups + cache.used;
-            bool record = true;
+            bool record = e.drawnAgain;
             size_t p = gallopLowerBound(recs, nrecs, hint, e.recBegin);
             for (; p < nrecs && recs[p] < e.recEnd; ++p) {
                 // A tile's records are scattered through the records: fetch ahead (no effect on
