@@ -113,66 +113,73 @@ __attribute__((target("avx2"))) inline __m128i clampEncode4(__m256d z, int bits)
     }
 }
 
-// A record whose rectangle, clipped to the tile, is at most 2 x 2 pixels (most, on meshes finer
-// than the image): all its pixels in one vector, lanes (x0, y0), (x0 + 1, y0), (x0, y0 + 1),
-// (x0 + 1, y0 + 1), instead of the scalar loop's chain of double operations per pixel. The same
+// A record whose rectangle, clipped to the tile, is one or two pixels wide (most, on meshes finer
+// than the image): two rows at a time in one vector, lanes (x0, j), (x0 + 1, j), (x0, j + 1),
+// (x0 + 1, j + 1), instead of the scalar loop's chain of double operations per pixel. The same
 // edge functions (integers), the same depth operations per pixel in the same order
 // (DepthPlane::row, then at), so the same fragments, depths and counts; recorded as one group per
 // row (replays apply the same fragments in the same order).
 template <DepthFunc F, bool Float, bool Record>
-__attribute__((target("avx2"))) void rasterizeSmallAvx2(const EdgeTri& t, int x0, int y0, int x1, int y1,
-                                                        uint32_t* depth, size_t stride, bool mask, int bits,
-                                                        uint64_t& fragments, uint64_t& passed, FragGroup*& rec) {
-    const int wide = x1 > x0, tall = y1 > y0;
-    const int valid = (wide ? 3 : 1) | (tall ? (wide ? 12 : 4) : 0);
-    int outside = 0;
-    {
-        __m256i any = _mm256_setzero_si256();
-        for (int k = 0; k < 3; ++k) {
-            const int64_t a = t.a[k], b = t.b[k], base = a * x0 + b * y0 + t.c[k];
-            any = _mm256_or_si256(any, _mm256_add_epi64(_mm256_set1_epi64x(base), _mm256_setr_epi64x(0, a, b, a + b)));
-        }
-        outside = _mm256_movemask_pd(_mm256_castsi256_pd(any));
+__attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x0, int y0, int x1, int y1,
+                                                         uint32_t* depth, size_t stride, bool mask, int bits,
+                                                         uint64_t& fragments, uint64_t& passed, FragGroup*& rec) {
+    const bool wide = x1 > x0;
+    // The edge functions at the block's four pixels, and their step to the next pair of rows.
+    __m256i e[3], down[3];
+    for (int k = 0; k < 3; ++k) {
+        const int64_t a = t.a[k], b = t.b[k], base = a * x0 + b * y0 + t.c[k];
+        e[k] = _mm256_add_epi64(_mm256_set1_epi64x(base), _mm256_setr_epi64x(0, a, b, a + b));
+        down[k] = _mm256_set1_epi64x(2 * b);
     }
-    const int inside = ~outside & valid;
-    if (inside == 0) return;
     // Pixel centres double(i) + 0.5 and double(j) + 0.5: exact.
-    const __m256d cx = _mm256_setr_pd(x0 + 0.5, x0 + 1.5, x0 + 0.5, x0 + 1.5);
-    const __m256d cy = _mm256_setr_pd(y0 + 0.5, y0 + 0.5, y0 + 1.5, y0 + 1.5);
     const DepthPlane& p = t.plane;
-    const __m256d row = _mm256_add_pd(_mm256_set1_pd(p.z0),
-                                      _mm256_mul_pd(_mm256_set1_pd(p.dzdy), _mm256_sub_pd(cy, _mm256_set1_pd(p.y0))));
-    const __m256d z =
-        _mm256_add_pd(row, _mm256_mul_pd(_mm256_set1_pd(p.dzdx), _mm256_sub_pd(cx, _mm256_set1_pd(p.x0))));
-    const __m128i incoming = clampEncode4<Float>(z, bits);
-    uint32_t* const d0 = depth + size_t(y0) * stride + size_t(x0);
-    uint32_t* const d1 = tall ? d0 + stride : d0;  // the second row's, read and written only when there is one
-    const int top = inside & 3, bottom = inside >> 2;
-    if constexpr (Record) {
-        if (top) {
-            FragGroup* g = rec++;
-            g->pixel = uint32_t(size_t(y0) * stride + size_t(x0));
-            g->lanes = uint32_t(top);
-            _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), incoming);
-        }
-        if (bottom) {
-            FragGroup* g = rec++;
-            g->pixel = uint32_t(size_t(y0 + 1) * stride + size_t(x0));
-            g->lanes = uint32_t(bottom);
-            _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), _mm_srli_si128(incoming, 8));
-        }
-    }
+    const __m256d cx = _mm256_setr_pd(x0 + 0.5, x0 + 1.5, x0 + 0.5, x0 + 1.5);
+    const __m256d dx = _mm256_sub_pd(cx, _mm256_set1_pd(p.x0));
+    const __m256d z0 = _mm256_set1_pd(p.z0), dzdx = _mm256_set1_pd(p.dzdx), dzdy = _mm256_set1_pd(p.dzdy);
+    const __m256d py0 = _mm256_set1_pd(p.y0);
     const auto laneMask = [](int bits4) { return _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[bits4])); };
-    const __m128i stored = _mm_unpacklo_epi64(_mm_maskload_epi32(reinterpret_cast<const int*>(d0), laneMask(top)),
-                                              _mm_maskload_epi32(reinterpret_cast<const int*>(d1), laneMask(bottom)));
-    const __m128i ok = depthTest4<F>(incoming, stored, laneMask(inside));
-    const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
-    fragments += uint64_t(std::popcount(unsigned(inside)));
-    passed += uint64_t(std::popcount(unsigned(okBits)));
-    if (mask && okBits != 0) {
-        _mm_maskstore_epi32(reinterpret_cast<int*>(d0), _mm_and_si128(ok, laneMask(3)), incoming);
-        _mm_maskstore_epi32(reinterpret_cast<int*>(d1), _mm_srli_si128(ok, 8), _mm_srli_si128(incoming, 8));
+    uint64_t frag = 0, pass = 0;
+    for (int j = y0; j <= y1; j += 2, e[0] = _mm256_add_epi64(e[0], down[0]), e[1] = _mm256_add_epi64(e[1], down[1]),
+             e[2] = _mm256_add_epi64(e[2], down[2])) {
+        const bool tall = j < y1;
+        const int valid = (wide ? 3 : 1) | (tall ? (wide ? 12 : 4) : 0);
+        const int outside = _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_or_si256(e[0], _mm256_or_si256(e[1], e[2]))));
+        const int inside = ~outside & valid;
+        if (inside == 0) continue;
+        const __m256d cy = _mm256_setr_pd(j + 0.5, j + 0.5, j + 1.5, j + 1.5);
+        const __m256d row = _mm256_add_pd(z0, _mm256_mul_pd(dzdy, _mm256_sub_pd(cy, py0)));
+        const __m128i incoming = clampEncode4<Float>(_mm256_add_pd(row, _mm256_mul_pd(dzdx, dx)), bits);
+        uint32_t* const d0 = depth + size_t(j) * stride + size_t(x0);
+        uint32_t* const d1 = tall ? d0 + stride : d0;  // the second row's, read and written only when there is one
+        const int top = inside & 3, bottom = inside >> 2;
+        if constexpr (Record) {
+            if (top) {
+                FragGroup* g = rec++;
+                g->pixel = uint32_t(size_t(j) * stride + size_t(x0));
+                g->lanes = uint32_t(top);
+                _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), incoming);
+            }
+            if (bottom) {
+                FragGroup* g = rec++;
+                g->pixel = uint32_t(size_t(j + 1) * stride + size_t(x0));
+                g->lanes = uint32_t(bottom);
+                _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), _mm_srli_si128(incoming, 8));
+            }
+        }
+        const __m128i stored =
+            _mm_unpacklo_epi64(_mm_maskload_epi32(reinterpret_cast<const int*>(d0), laneMask(top)),
+                               _mm_maskload_epi32(reinterpret_cast<const int*>(d1), laneMask(bottom)));
+        const __m128i ok = depthTest4<F>(incoming, stored, laneMask(inside));
+        const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
+        frag += uint64_t(std::popcount(unsigned(inside)));
+        pass += uint64_t(std::popcount(unsigned(okBits)));
+        if (mask && okBits != 0) {
+            _mm_maskstore_epi32(reinterpret_cast<int*>(d0), _mm_and_si128(ok, laneMask(3)), incoming);
+            _mm_maskstore_epi32(reinterpret_cast<int*>(d1), _mm_srli_si128(ok, 8), _mm_srli_si128(incoming, 8));
+        }
     }
+    fragments += frag;
+    passed += pass;
 }
 
 template <DepthFunc F, bool Float, bool Record>
@@ -182,15 +189,10 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     const int x0 = std::max<int>(t.x0, bx0), x1 = std::min<int>(t.x1, bx1);
     const int y0 = std::max<int>(t.y0, by0), y1 = std::min<int>(t.y1, by1);
     if (x0 > x1 || y0 > y1) return;
-    // Records one or two pixels wide: at most 2 x 2 in one vector, taller ones in the scalar loop
-    // (they cost less there than the vector constants do).
-    if (x1 - x0 < 2) {
-        if (y1 - y0 < 2)
-            return rasterizeSmallAvx2<F, Float, Record>(t, x0, y0, x1, y1, depth, stride, mask, bits, fragments, passed,
-                                                        rec);
-        return rasterizeInTile<F, Float, Record>(t, bx0, by0, bx1, by1, depth, stride, mask, bits, fragments, passed,
-                                                 rec);
-    }
+    // Records one or two pixels wide: two rows at a time in one vector.
+    if (x1 - x0 < 2)
+        return rasterizeNarrowAvx2<F, Float, Record>(t, x0, y0, x1, y1, depth, stride, mask, bits, fragments, passed,
+                                                     rec);
     const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2], b0 = t.b[0], b1 = t.b[1], b2 = t.b[2];
     const __m256i off0 = _mm256_set_epi64x(3 * a0, 2 * a0, a0, 0), step0 = _mm256_set1_epi64x(4 * a0);
     const __m256i off1 = _mm256_set_epi64x(3 * a1, 2 * a1, a1, 0), step1 = _mm256_set1_epi64x(4 * a1);
