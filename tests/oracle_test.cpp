@@ -12,6 +12,7 @@
 #include "test_util.h"
 
 #include "../oracle/src/broad_phase.h"
+#include "../oracle/src/narrow_phase.h"
 
 #include <gtest/gtest.h>
 
@@ -424,6 +425,36 @@ TEST(Oracle, NearlyCoplanarNeighboursMatchFaceContact) {
 // coplanar, the case the exact integer paths decide.
 TEST(OracleCgal, SubdividedCowSameAsCgal) {
     expectSameAsCgal(subdivide(bundled("cow.off")), "subdivided cow");
+}
+
+// Trap: objects of up to detail::spatialOrderMin triangles keep the mesh's own order, larger ones
+// the Morton order; the truth must not depend on it (the pairs are put in triangle order, and the
+// triangles come back from the records, not from their positions). Both orders on the same
+// scenes: a subdivided cow (nearly coplanar neighbours), two cows (two objects, pairs between
+// them) and the exact stage on a subset of one of them.
+TEST(Oracle, SameTruthInMortonAndMeshOrder) {
+    const size_t saved = detail::spatialOrderMin;
+    auto both = [&](auto&& run) {
+        detail::spatialOrderMin = 0;  // every object in Morton order
+        const Truth morton = run();
+        detail::spatialOrderMin = ~size_t(0);  // every object in its own order
+        const Truth own = run();
+        detail::spatialOrderMin = saved;
+        EXPECT_FALSE(morton.pairs.empty());
+        EXPECT_EQ(morton.pairs, own.pairs);
+        EXPECT_EQ(morton.degenerate, own.degenerate);
+        EXPECT_EQ(morton.candidatePairs, own.candidatePairs);
+    };
+    const Mesh cow = subdivide(bundled("cow.off"));
+    both([&] { return findIntersections(sceneOf({cow})); });
+    Scene two = sceneOf({bundled("cow.off"), bundled("cow.off")});
+    two.objects[1].transform.translate(Vec3f(0.25f, 0.02f, 0.05f));  // as the bench's two cows
+    both([&] { return findIntersections(two); });
+    std::vector<TriangleRef> pcs;
+    for (uint32_t o = 0; o < 2; ++o)
+        for (uint32_t t = 0; t < uint32_t(two.objects[o].mesh.triangleCount()); t += 1 + (o == 0))
+            pcs.push_back({o, t});
+    both([&] { return exactStage(two, pcs); });
 }
 
 }  // namespace

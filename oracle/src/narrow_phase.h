@@ -34,6 +34,12 @@ struct Plane {
 };
 Plane planeOf(const Prim& prim);
 
+// Objects of more triangles than this have their primitive records in Morton order of their
+// first corner (cache locality of the narrow phase's reads); smaller ones keep the mesh's own
+// order (fits in cache; meshes come mostly in a coherent order). A variable so that the tests can
+// run both orders on the same mesh; 2^16 (oracle.cpp).
+extern size_t spatialOrderMin;
+
 // The narrow phase of one candidate pair (planeA = planeOf(a); storedB = &planeOf(b) where stored,
 // null to compute it here when needed) (faceContact's answer, exactly): by the shared vertex
 // ids, the exact signs of each triangle's corners against the other's plane (filter first, then
