@@ -55,8 +55,9 @@ uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
 // range [lo, hi) of positions in out_.order, and its face adjacency is kept restricted to that
 // range: the row of position p holds the positions of p's neighbours inside the range, in
 // increasing order of their triangle ids (the order of the searches this follows). After each
-// bisection the rows of both halves are rebuilt, restricted to themselves. So a search needs no
-// membership test, and a patch's triangles sit next to each other in memory.
+// bisection the rows of both halves are rebuilt, restricted to themselves, into the other of two
+// row arrays (so no copy back; a range's rows are in one, its halves' in the other). So a search
+// needs no membership test, and a patch's triangles sit next to each other in memory.
 //
 // A row is three slots (a triangle has three edges), unused ones holding the position itself: a
 // triangle is labelled kVisited before its row is read, so it never passes for an open or first
@@ -70,37 +71,38 @@ uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
 template <typename T>
 using Pages = UnwrittenVector<T, true>;
 
-// A part of a node's partition: its size, and whether its order is a breadth-first order of the
-// whole part from its first position (see partition()).
+// A part of a node's partition: its size, whether its order is a breadth-first order of the
+// whole part from its first position (see partition()), and which of the two row arrays
+// (Builder::rows_) holds its rows.
 struct Part {
     uint32_t size;
     bool searched;
+    uint8_t rows;
 };
 
 // What one thread's splits write besides the shared arrays, indexed from the start of the range
-// being split: queue (breadth-first order, then the new order), tmpSlots (first the pieces, then
-// triangle ids, then rebuilt rows, 3 each: one after another, so they share it), and the small
-// stacks.
+// being split: queue (breadth-first order, then the new triangle ids), and the small stacks.
+// (The pieces of a bisection and its rebuilt rows go to the row array its range does not use.)
 //
-// The two arrays are views: the root's are the build's own (Builder::queue_, tmpSlots_), and a
-// parallel subtree's are a slice of its parent's, not arrays of its own. Fresh pages cost a page
-// fault each on first write, and on the shared build machine's VM a 4 KiB fault costs ~17 us
+// The queue is a view: the root's is the build's own (Builder::queue_), and a parallel subtree's
+// is a slice of its parent's, not an array of its own. Fresh pages cost a page fault each on
+// first write, and on the shared build machine's VM a 4 KiB fault costs ~17 us
 // (4 ms per MiB): the subtrees' own scratch (40 MB in 4 KiB-page arrays for 1M triangles) was
 // about a fifth of a 1M build. The memory is the same: a parent's scratch was freed before its
 // children allocated theirs, as large together.
-// For a range of m positions, queue holds m + slack entries and tmpSlots 3m + slack (a search
-// writes one past its last entry, so slack >= 1, and siblings' slices must not overlap there).
+// For a range of m positions, queue holds m + slack entries (a search writes one past its last
+// entry, so slack >= 1, and siblings' slices must not overlap there).
 struct Scratch {
-    uint32_t *queue = nullptr, *tmpSlots = nullptr;
+    uint32_t* queue = nullptr;
     size_t slack = 0;
     std::vector<Part> sizes;
     std::vector<uint32_t> pieceStart;
     std::vector<uint8_t> moved;
-    Pages<uint32_t> ownQueue, ownSlots;  // only where the parent's slack ran out
+    Pages<uint32_t> ownQueue;  // only where the parent's slack ran out
 
-    void allocate(uint32_t n) {  // arrays of its own, for ranges of up to n positions
-        ownQueue.resize(size_t(n) + 1), ownSlots.resize(3 * size_t(n) + 1);
-        queue = ownQueue.data(), tmpSlots = ownSlots.data(), slack = 1;
+    void allocate(uint32_t n) {  // a queue of its own, for ranges of up to n positions
+        ownQueue.resize(size_t(n) + 1);
+        queue = ownQueue.data(), slack = 1;
     }
 };
 
@@ -132,11 +134,11 @@ public:
             // allocates its own scratch.
             const size_t slack = 1 + n / 1024;
             queue_.resize(n + slack);
-            buildAdjacency(slack);
+            buildAdjacency();
             mark_.resize(n);
-            root_.queue = queue_.data(), root_.tmpSlots = tmpSlots_.data(), root_.slack = slack;
+            root_.queue = queue_.data(), root_.slack = slack;
         }
-        split(out_.nodes, 0, root_, false);
+        split(out_.nodes, 0, root_, {n, false, 0});
     }
 
 private:
@@ -154,10 +156,10 @@ private:
     // triangles sharing edge (a, b) are among those incident to a. Positions are triangle ids at
     // the root.
     //
-    // The incidence array becomes the root's tmpSlots (3n + slack entries), and the vertex starts
+    // The incidence array becomes the second row array (3n entries), and the vertex starts
     // live in the root's queue where they fit: both are then written for the first time here, and
     // their page faults are paid once.
-    void buildAdjacency(size_t slack) {
+    void buildAdjacency() {
         const uint32_t n = uint32_t(mesh_.triangles.size());
         const size_t nv = mesh_.positions.size();
         std::vector<uint32_t> ownStart;
@@ -167,7 +169,7 @@ private:
         for (const Triangle& tri : mesh_.triangles)
             for (uint32_t v : tri) ++vstart[v + 1];
         for (size_t v = 0; v < nv; ++v) vstart[v + 1] += vstart[v];
-        Pages<uint32_t> incident(vstart[nv] + slack);  // vstart[nv] = 3n
+        Pages<uint32_t> incident(vstart[nv]);  // vstart[nv] = 3n
         // Fill by advancing each vertex's start to its end, then shift the starts back: no array
         // of cursors.
         for (uint32_t t = 0; t < n; ++t)
@@ -178,7 +180,8 @@ private:
         // The rows, in parallel blocks: each row depends on the incidence only. A row longer than
         // three goes to overflow_, which is appended in triangle order afterwards (non-manifold
         // edges are rare), so the layout does not depend on the threads.
-        slots_.resize(3 * size_t(n));
+        Pages<uint32_t>& slots = rows_[0];
+        slots.resize(3 * size_t(n));
         overflow_.clear();
         auto rowOf = [&](uint32_t t, std::vector<uint32_t>& row) {
             const Triangle& tri = mesh_.triangles[t];
@@ -202,7 +205,7 @@ private:
             std::vector<uint32_t> row;
             for (uint32_t t = uint32_t(blk) * kBlock, e = std::min(n, t + kBlock); t < e; ++t) {
                 rowOf(t, row);
-                uint32_t* slot = slots_.data() + 3 * size_t(t);
+                uint32_t* slot = slots.data() + 3 * size_t(t);
                 if (row.size() <= 3) {
                     for (size_t i = 0; i < 3; ++i) slot[i] = i < row.size() ? row[i] : t;
                 } else {
@@ -215,7 +218,7 @@ private:
             for (uint32_t t : ts) {
                 rowOf(t, row);
                 CULLIDE_CHECK(overflow_.size() + row.size() < kNone, "overflow rows fit 32-bit offsets");
-                uint32_t* slot = slots_.data() + 3 * size_t(t);
+                uint32_t* slot = slots.data() + 3 * size_t(t);
                 slot[0] = kEscape, slot[1] = uint32_t(overflow_.size()), slot[2] = uint32_t(row.size());
                 overflow_.insert(overflow_.end(), row.begin(), row.end());
             }
@@ -223,9 +226,9 @@ private:
             posOf_.resize(n);
             for (uint32_t t = 0; t < n; ++t) posOf_[t] = t;
         }
-        // Rebuilt rows are written aside, then copied back: the incidence array (3n entries, as
-        // many as the slots) serves for that.
-        tmpSlots_ = std::move(incident);
+        // A bisection writes its halves' rows to the other row array (no copy back): the incidence
+        // array (3n entries, as many as the slots, already written once) serves as that.
+        rows_[1] = std::move(incident);
     }
 
     // Splits nodes[i] and its descendants, appending them to `nodes` depth first: a node's
@@ -237,9 +240,10 @@ private:
     // subtrees' positions are disjoint ranges, so they share the arrays indexed by position or by
     // triangle id (each writes only its own part) and read the overflow rows only.
     //
-    // `searched`: the node's order is a breadth-first order of the whole node from its first
-    // position (Part::searched), so that search's farthest position is known: the last one.
-    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s, bool searched) {
+    // `part`: the node as a part of its parent's partition. part.searched: the node's order is a
+    // breadth-first order of the whole node from its first position, so that search's farthest
+    // position is known: the last one. part.rows: the row array holding the node's rows.
+    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s, Part part) {
         const HierarchyNode node = nodes[i];
         if (node.count <= opt_.leafSize) return;
         const uint32_t k = std::min<uint32_t>(opt_.branching, node.count);
@@ -247,9 +251,10 @@ private:
         const size_t base = s.sizes.size();
         if (opt_.kind == HierarchyKind::Connectivity) {
             const uint32_t hi = node.first + node.count;
-            partition(s, node.first, hi, k, searched ? hi - 1 : kNone, searched);
+            partition(s, node.first, hi, k, part.searched ? hi - 1 : kNone, part.searched, part.rows);
         } else {
-            for (uint32_t c = 0; c < k; ++c) s.sizes.push_back({node.count / k + (c < node.count % k ? 1 : 0), false});
+            for (uint32_t c = 0; c < k; ++c)
+                s.sizes.push_back({node.count / k + (c < node.count % k ? 1 : 0), false, 0});
         }
 
         const uint32_t firstChild = uint32_t(nodes.size());
@@ -264,7 +269,7 @@ private:
             first += size;
         }
         if (node.count < kParallelNode) {
-            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s, s.sizes[base + c].searched);
+            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s, s.sizes[base + c]);
             s.sizes.resize(base);
             return;
         }
@@ -281,13 +286,12 @@ private:
             if (opt_.kind == HierarchyKind::Connectivity) {
                 const size_t offset = sub[c][0].first - node.first;
                 if (childSlack >= 1) {
-                    local.queue = s.queue + offset + c * childSlack;
-                    local.tmpSlots = s.tmpSlots + 3 * offset + c * childSlack, local.slack = childSlack;
+                    local.queue = s.queue + offset + c * childSlack, local.slack = childSlack;
                 } else {
                     local.allocate(sub[c][0].count);
                 }
             }
-            split(sub[c], 0, local, parts[c].searched);
+            split(sub[c], 0, local, parts[c]);
         });
         for (uint32_t c = 0; c < childCount; ++c) {
             // Local index j >= 1 lands at nodes.size() + j - 1; leaves keep firstChild 0.
@@ -302,10 +306,11 @@ private:
     }
 
     // Calls f(q) for the neighbours q of position p in the range [lo, hi), in increasing order
-    // of triangle id, and for p itself in unused slots (p is labelled kVisited by then).
+    // of triangle id, and for p itself in unused slots (p is labelled kVisited by then). `rows`:
+    // the row array holding the range's rows.
     template <class F>
-    void forNeighbours(uint32_t p, uint32_t lo, uint32_t hi, F&& f) const {
-        const uint32_t* slot = slots_.data() + 3 * size_t(p);
+    void forNeighbours(const uint32_t* rows, uint32_t p, uint32_t lo, uint32_t hi, F&& f) const {
+        const uint32_t* slot = rows + 3 * size_t(p);
         if (slot[0] != kEscape) {
             f(slot[0]), f(slot[1]), f(slot[2]);
             return;
@@ -326,11 +331,29 @@ private:
     // only if it was open.
     // The row of the triangle 16 places ahead in the queue is prefetched: near the top of the
     // tree the rows lie beyond the caches, and the search would wait on each (5-10% of a 1M build).
-    uint32_t grow(uint32_t* queue, uint32_t head, uint32_t size, uint32_t lo, uint32_t hi) {
+    // A three-slot row reads its three labels before writing any: its entries are distinct but
+    // for repeats of the position itself (kVisited, left as is), so no write changes a label read
+    // after it, and the loads no longer wait on the stores (the compiler cannot know that).
+    uint32_t grow(const uint32_t* rows, uint32_t* queue, uint32_t head, uint32_t size, uint32_t lo, uint32_t hi) {
         uint32_t* mark = mark_.data();
         for (; head < size; ++head) {
-            if (head + 16 < size) __builtin_prefetch(slots_.data() + 3 * size_t(queue[head + 16]));
-            forNeighbours(queue[head], lo, hi, [&](uint32_t u) {
+            if (head + 16 < size) __builtin_prefetch(rows + 3 * size_t(queue[head + 16]));
+            const uint32_t* slot = rows + 3 * size_t(queue[head]);
+            if (slot[0] != kEscape) {
+                const uint32_t a = slot[0], b = slot[1], c = slot[2];
+                const uint32_t la = mark[a], lb = mark[b], lc = mark[c];
+                queue[size] = a;
+                size += la == kOpen;
+                queue[size] = b;
+                size += lb == kOpen;
+                queue[size] = c;
+                size += lc == kOpen;
+                mark[a] = la == kOpen ? kVisited : la;
+                mark[b] = lb == kOpen ? kVisited : lb;
+                mark[c] = lc == kOpen ? kVisited : lc;
+                continue;
+            }
+            forNeighbours(rows, queue[head], lo, hi, [&](uint32_t u) {
                 const uint32_t label = mark[u];
                 queue[size] = u;
                 size += label == kOpen;
@@ -354,18 +377,21 @@ private:
     // `hint`: a position on the range's periphery, when the caller knows one (kNone otherwise).
     // `searched`: the range's order is a breadth-first order of the whole range from lo (pushed
     // with its size when the range is a part).
-    void partition(Scratch& s, uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint, bool searched) {
+    // `r`: the row array holding the range's rows (rows_[r]); the halves' rows go to the other.
+    void partition(Scratch& s, uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint, bool searched, uint8_t r) {
         const uint32_t n = hi - lo;
         if (k < 2 || n < 2) {
-            s.sizes.push_back({n, searched});
+            s.sizes.push_back({n, searched, r});
             return;
         }
+        const uint32_t* rows = rows_[r].data();
+        uint32_t* other = rows_[1 - r].data();
         const uint32_t half = k / 2;
         const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
 
         // (At the root this is also the first write of mark_: the threads share its page faults.)
         blocks(lo, hi, [&](uint32_t b, uint32_t e) { std::fill(mark_.begin() + b, mark_.begin() + e, kOpen); });
-        const uint32_t seed = hint != kNone ? hint : farthest(s, lo, hi);
+        const uint32_t seed = hint != kNone ? hint : farthest(s, rows, lo, hi);
         // Breadth-first order over the range from the seed; when a component is exhausted, go on
         // from the first unvisited position.
         uint32_t* bfs = s.queue;
@@ -373,16 +399,16 @@ private:
         while (size < n) {
             mark_[start] = kVisited;
             bfs[size++] = start;
-            size = grow(bfs, size - 1, size, lo, hi);
+            size = grow(rows, bfs, size - 1, size, lo, hi);
             if (firstComponent == 0) firstComponent = size;
             while (scan < hi && mark_[scan] != kOpen) ++scan;
             if (scan < hi) start = scan;
         }
 
-        // Label the first part kFirst, then find the pieces of the rest, one after another in
-        // s.tmpSlots.
+        // Label the first part kFirst, then find the pieces of the rest, one after another in the
+        // other row array's slots of the range (free until the halves' rows are written there).
         for (uint32_t i = 0; i < n; ++i) mark_[bfs[i]] = i < target ? kFirst : kOpen;
-        uint32_t* pieces = s.tmpSlots;
+        uint32_t* pieces = other + 3 * size_t(lo);
         uint32_t pieceEnd = 0;
         s.pieceStart.clear();
         for (uint32_t i = target; i < n; ++i) {
@@ -390,7 +416,7 @@ private:
             s.pieceStart.push_back(pieceEnd);
             mark_[bfs[i]] = kVisited;
             pieces[pieceEnd++] = bfs[i];
-            pieceEnd = grow(pieces, pieceEnd - 1, pieceEnd, lo, hi);
+            pieceEnd = grow(rows, pieces, pieceEnd - 1, pieceEnd, lo, hi);
         }
         s.pieceStart.push_back(pieceEnd);
         const size_t pieceCount = s.pieceStart.size() - 1;
@@ -406,7 +432,7 @@ private:
             if (p == largest) continue;  // stays in the second part whatever it touches
             bool touchesFirst = false;
             for (uint32_t i = s.pieceStart[p]; i < s.pieceStart[p + 1] && !touchesFirst; ++i)
-                forNeighbours(pieces[i], lo, hi, [&](uint32_t u) { touchesFirst |= mark_[u] == kFirst; });
+                forNeighbours(rows, pieces[i], lo, hi, [&](uint32_t u) { touchesFirst |= mark_[u] == kFirst; });
             if (!touchesFirst) continue;
             s.moved[p] = 1;
             --kept;
@@ -423,24 +449,24 @@ private:
             for (uint32_t j = b; j < e; ++j) mark_[bfs[j - lo]] = j;
         });
         blocks(lo, hi, [&](uint32_t b, uint32_t e) {
-            for (uint32_t p = b; p < e; ++p) s.tmpSlots[mark_[p] - lo] = out_.order[p];
+            for (uint32_t p = b; p < e; ++p) bfs[mark_[p] - lo] = out_.order[p];  // bfs is read by now
         });
         blocks(lo, hi, [&](uint32_t b, uint32_t e) {
-            std::copy(s.tmpSlots + (b - lo), s.tmpSlots + (e - lo), out_.order.begin() + b);
+            std::copy(bfs + (b - lo), bfs + (e - lo), out_.order.begin() + b);
             if (!posOf_.empty())
                 for (uint32_t p = b; p < e; ++p)  // read concurrently by forNeighbours of other ranges
                     std::atomic_ref<uint32_t>(posOf_[out_.order[p]]).store(p, std::memory_order_relaxed);
         });
         if (needsRows(f, half) || needsRows(n - f, k - half)) {
             // Each half's rows keep the neighbours in that half, in place (the position itself
-            // elsewhere).
+            // elsewhere), written to the other row array: the halves read them from there.
             const uint32_t mid = lo + f;
             blocks(lo, hi, [&](uint32_t begin, uint32_t end) {
                 for (uint32_t p = begin; p < end; ++p) {
                     const uint32_t np = mark_[p];
                     const uint32_t a = np < mid ? lo : mid, b = np < mid ? mid : hi;
-                    const uint32_t* slot = slots_.data() + 3 * size_t(p);
-                    uint32_t* out = s.tmpSlots + 3 * size_t(np - lo);
+                    const uint32_t* slot = rows + 3 * size_t(p);
+                    uint32_t* out = other + 3 * size_t(np);
                     if (slot[0] == kEscape) {
                         std::copy(slot, slot + 3, out);
                         continue;
@@ -450,10 +476,6 @@ private:
                         out[i] = q >= a && q < b ? q : np;
                     }
                 }
-            });
-            blocks(lo, hi, [&](uint32_t b, uint32_t e) {
-                std::copy(s.tmpSlots + 3 * size_t(b - lo), s.tmpSlots + 3 * size_t(e - lo),
-                          slots_.begin() + 3 * size_t(b));
             });
         }
 
@@ -474,18 +496,18 @@ private:
         const size_t g = s.slack / 2;
         if (n >= kParallelNode && half >= 2 && f >= 2 && n - f >= 2 && g >= 1) {
             Scratch first, second;
-            first.queue = s.queue, first.tmpSlots = s.tmpSlots, first.slack = g;
-            second.queue = s.queue + f + g, second.tmpSlots = s.tmpSlots + 3 * size_t(f) + g, second.slack = g;
+            first.queue = s.queue, first.slack = g;
+            second.queue = s.queue + f + g, second.slack = g;
             parallelForEach(0, 2, [&](size_t i) {
-                if (i == 0) partition(first, lo, lo + f, half, lo + f - 1, firstSearched);
-                else partition(second, lo + f, hi, k - half, hi - 1, secondSearched);
+                if (i == 0) partition(first, lo, lo + f, half, lo + f - 1, firstSearched, uint8_t(1 - r));
+                else partition(second, lo + f, hi, k - half, hi - 1, secondSearched, uint8_t(1 - r));
             });
             s.sizes.insert(s.sizes.end(), first.sizes.begin(), first.sizes.end());
             s.sizes.insert(s.sizes.end(), second.sizes.begin(), second.sizes.end());
             return;
         }
-        partition(s, lo, lo + f, half, lo + f - 1, firstSearched);
-        partition(s, lo + f, hi, k - half, hi - 1, secondSearched);
+        partition(s, lo, lo + f, half, lo + f - 1, firstSearched, uint8_t(1 - r));
+        partition(s, lo + f, hi, k - half, hi - 1, secondSearched, uint8_t(1 - r));
     }
 
     // Calls body(b, e) on blocks [b, e) covering [lo, hi): in parallel for a large range, whose
@@ -502,11 +524,11 @@ private:
 
     // The position of [lo, hi) farthest in hops from `from` (ties: the last reached in
     // breadth-first order). Expects the range labelled kOpen and leaves it so.
-    uint32_t farthest(Scratch& s, uint32_t from, uint32_t hi) {
+    uint32_t farthest(Scratch& s, const uint32_t* rows, uint32_t from, uint32_t hi) {
         uint32_t* queue = s.queue;
         queue[0] = from;
         mark_[from] = kVisited;
-        const uint32_t size = grow(queue, 0, 1, from, hi);  // from is the range's first position
+        const uint32_t size = grow(rows, queue, 0, 1, from, hi);  // from is the range's first position
         std::fill(mark_.begin() + from, mark_.begin() + hi, kOpen);
         return queue[size - 1];
     }
@@ -519,12 +541,13 @@ private:
     Hierarchy& out_;
     std::mt19937_64 rng_;
     Scratch root_;  // the root's, and every subtree's split on this thread
-    // Connectivity only, shared by parallel subtrees. By position: slots_ (rows, 3 each), mark_
+    // Connectivity only, shared by parallel subtrees. By position: rows_ (rows, 3 each: a range's
+    // in one of the two, its halves' in the other; the second is the incidence array), mark_
     // (labels during a bisection, then old -> new position). By triangle id, only when some row
-    // overflows: posOf_. slots_ and mark_ start unwritten (cullide/unwritten.h; zeroing the
+    // overflows: posOf_. rows_ and mark_ start unwritten (cullide/unwritten.h; zeroing the
     // arrays of n or 3n entries was 12% of a 1M build).
-    Pages<uint32_t> slots_, mark_;
-    Pages<uint32_t> queue_, tmpSlots_;  // the root's scratch, sliced for parallel subtrees
+    Pages<uint32_t> rows_[2], mark_;
+    Pages<uint32_t> queue_;  // the root's scratch, sliced for parallel subtrees
     std::vector<uint32_t> overflow_, posOf_;
 };
 
