@@ -60,13 +60,9 @@ void makeEvents(const CommandList& list, const DepthFormat& format, const TileGr
         const uint64_t key = uint64_t(e.first) << 32 | e.count;
         out.source[k] = out.firstDraw[e.conservative ? 1 : 0].try_emplace(key, uint32_t(k)).first->second;
     }
-    // Which plain draws are drawn again (by record range, as FragCache finds them), from the back.
-    out.laterRanges.clear();
-    for (size_t k = events.size(); k-- > 0;) {
-        Event& e = events[k];
-        if (e.clears() || e.conservative || e.recBegin == e.recEnd) continue;
-        e.drawnAgain = !out.laterRanges.insert(uint64_t(e.recBegin) << 32 | e.recEnd).second;
-    }
+    // A draw that a later one repeats (its source) is worth recording for replay.
+    for (size_t k = 0; k < events.size(); ++k)
+        if (out.source[k] != k) events[out.source[k]].drawnAgain = true;
     parallelFor(0, events.size(), 256, [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
             Event& e = events[k];

@@ -16,7 +16,6 @@
 #include <cstdint>
 #include <span>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 namespace cullide::raster::detail {
@@ -148,8 +147,9 @@ struct Event {
     int32_t query = -1;
     uint32_t clearValue = 0;
     uint32_t recBegin = 0, recEnd = 0;  // draw: record range
-    // Plain draw: a later draw of the list has the same record range, so its fragments are worth
-    // recording for replay (FragCache); a draw of one range only is rasterized without recording.
+    // Draw: a later draw of the list draws the same triangles (makeEvents' source), so its
+    // fragments are worth recording for replay (FragCache); a draw of a range drawn once is
+    // rasterized without recording.
     bool drawnAgain = false;
     uint32_t first = 0, count = 0;  // draw: triangle range
     TileRect tiles = kNoTiles;
@@ -178,7 +178,6 @@ struct EventList {
     // found through the first draw of each (first, count), plain and conservative.
     std::vector<uint32_t> source;
     std::unordered_map<uint64_t, uint32_t> firstDraw[2];
-    std::unordered_set<uint64_t> laterRanges;  // record ranges of the plain draws after the current one
 };
 
 // Step 5a: the clears and draws of `list` as events, with the state that `walk` follows; each
