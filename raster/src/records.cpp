@@ -227,21 +227,22 @@ static_assert(((kRejected | kClipped | kZeroArea) & (kHintCw | kHintOne | kHintC
 // The count pass on the eight triangles tris[0..8) at once with AVX2: writes their hints to
 // hint[0..8) and returns their records, as setupDrawn's countOne does one by one (integers only:
 // the same verdicts). A SnapVertex is three 32-bit words (x, y, then inside and beyond in the low
-// bytes of the third), gathered by vertex index.
+// bytes of the third), loaded one by one into the lanes: AVX2's gathers were slower here (an AMD
+// EPYC; an A/B of BM_Prune, bunny 270k, one thread: 536, 532 -> 508, 504 ms without them, and
+// gathering the setup's window vertices too made it 559 -> 756 ms).
 static_assert(sizeof(SnapVertex) == 12 && offsetof(SnapVertex, y) == 4 && offsetof(SnapVertex, inside) == 8 &&
               offsetof(SnapVertex, beyond) == 9);
 __attribute__((target("avx2"))) uint32_t countHints8(const Triangle* tris, const SnapVertex* snapped,
                                                      const SetupParams& params, uint8_t* hint) {
-    const int* const corners = reinterpret_cast<const int*>(tris);
     const int* const words = reinterpret_cast<const int*>(snapped);
-    const __m256i every3 = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21), ones = _mm256_set1_epi32(-1);
+    const __m256i ones = _mm256_set1_epi32(-1);
     __m256i x[3], y[3], f = ones;
     for (int k = 0; k < 3; ++k) {
-        const __m256i v = _mm256_i32gather_epi32(corners + k, every3, 4);
-        const __m256i w = _mm256_add_epi32(_mm256_add_epi32(v, v), v);  // the vertex's first word
-        x[k] = _mm256_i32gather_epi32(words, w, 4);
-        y[k] = _mm256_i32gather_epi32(words + 1, w, 4);
-        f = _mm256_and_si256(f, _mm256_i32gather_epi32(words + 2, w, 4));
+        const int* w[8];
+        for (int l = 0; l < 8; ++l) w[l] = words + 3 * size_t(tris[l][k]);
+        x[k] = _mm256_setr_epi32(w[0][0], w[1][0], w[2][0], w[3][0], w[4][0], w[5][0], w[6][0], w[7][0]);
+        y[k] = _mm256_setr_epi32(w[0][1], w[1][1], w[2][1], w[3][1], w[4][1], w[5][1], w[6][1], w[7][1]);
+        f = _mm256_and_si256(f, _mm256_setr_epi32(w[0][2], w[1][2], w[2][2], w[3][2], w[4][2], w[5][2], w[6][2], w[7][2]));
     }
     const __m256i zero = _mm256_setzero_si256(), byte = _mm256_set1_epi32(0xFF);
     const __m256i inside = _mm256_cmpeq_epi32(_mm256_and_si256(f, byte), _mm256_set1_epi32(1));
