@@ -355,18 +355,12 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
     const TileGrid& grid = in.grid;
     auto flush = [&](SubTriangles& scratch) {
         if (scratch.pending == 0) return;
-        InsideBatch& b = scratch.batch;
+        const InsideBatch& b = scratch.batch;
         if (scratch.pending == 4) {
-            setupInsideEdgeTri4(b, params, scratch.records);
+            setupInsideEdgeTri4(b, in.window.data(), in.snapped.data(), params, scratch.records);
         } else {
-            for (int l = 0; l < scratch.pending; ++l) {
-                const WinVertex v[3] = {{b.x[0][l], b.y[0][l], b.z[0][l]},
-                                        {b.x[1][l], b.y[1][l], b.z[1][l]},
-                                        {b.x[2][l], b.y[2][l], b.z[2][l]}};
-                const int64_t sx[3] = {b.sx[0][l], b.sx[1][l], b.sx[2][l]};
-                const int64_t sy[3] = {b.sy[0][l], b.sy[1][l], b.sy[2][l]};
-                setupInsideEdgeTri(v[0], v[1], v[2], sx, sy, b.clockwise[l] != 0, params, *scratch.records[l]);
-            }
+            for (int l = 0; l < scratch.pending; ++l)
+                setupInsideLane(b, l, in.window.data(), in.snapped.data(), params, *scratch.records[l]);
         }
         for (int l = 0; l < scratch.pending; ++l) *scratch.tiles[l] = tileRectOf(*scratch.records[l], grid);
         scratch.pending = 0;
@@ -384,15 +378,7 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
                     if (const Reserved<EdgeTri> r = reserve(); r.record) {
                         const int l = scratch.pending++;
                         InsideBatch& b = scratch.batch;
-                        const WinVertex* v[3] = {&v0, &v1, &v2};
-                        const SnapVertex* sv[3] = {&s0, &s1, &s2};
-                        for (int k = 0; k < 3; ++k) {
-                            b.x[k][l] = v[k]->x;
-                            b.y[k][l] = v[k]->y;
-                            b.z[k][l] = v[k]->z;
-                            b.sx[k][l] = sv[k]->x;
-                            b.sy[k][l] = sv[k]->y;
-                        }
+                        for (int k = 0; k < 3; ++k) b.v[k][l] = tri[k];
                         b.clockwise[l] = h & kHintCw ? -1 : 0;
                         scratch.records[l] = r.record;
                         scratch.tiles[l] = r.tiles;
@@ -423,13 +409,13 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
             uint8_t any = 0;
             for (uint32_t t = lo; t < hi; ++t) any |= hint[t];
             if (any & kHintClip) return -1;
-            uint32_t* const list = scratch.ones;
+            uint32_t* const ones = scratch.ones;
             uint32_t n = 0;
             for (uint32_t t = lo; t < hi; ++t) {
                 const uint8_t h = hint[t];
                 const uint32_t one = (h >> 6) & 1;  // kHintOne
                 out.begin[t] = uint32_t(slot) + n;
-                list[n] = t;
+                ones[n] = t;
                 n += one;
                 out.end[t] = uint32_t(slot) + n;
             }
@@ -437,17 +423,9 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
             uint32_t k = 0;
             for (; k < n; ++k) {
                 const int l = scratch.pending++;
-                const uint32_t t = list[k];
+                const uint32_t t = ones[k];
                 const Triangle& tri = in.triangles[t];
-                for (int c = 0; c < 3; ++c) {
-                    const WinVertex& v = in.window[tri[c]];
-                    const SnapVertex& sv = in.snapped[tri[c]];
-                    b.x[c][l] = v.x;
-                    b.y[c][l] = v.y;
-                    b.z[c][l] = v.z;
-                    b.sx[c][l] = sv.x;
-                    b.sy[c][l] = sv.y;
-                }
+                for (int c = 0; c < 3; ++c) b.v[c][l] = tri[c];
                 b.clockwise[l] = hint[t] & kHintCw ? -1 : 0;
                 scratch.records[l] = recs + k;
                 scratch.tiles[l] = tiles + k;

@@ -16,16 +16,6 @@
 
 namespace cullide::raster::detail {
 
-// A vertex snapped once (rule 3); `inside` when it needs no clipping (then |x|, |y| <= 2^29).
-// `beyond`: the sides of the viewport it lies beyond (kBeyond*), as trivialReject tests them: three
-// inside vertices beyond one common side make a rejected triangle (inside vertices are finite and
-// within the depth range, trivialReject's other tests).
-struct SnapVertex {
-    int32_t x, y;
-    bool inside;
-    uint8_t beyond;
-};
-
 // Conservative mode (rules 10-13): a record and its fast-path edge functions.
 struct ConsRec {
     ConsTri t;

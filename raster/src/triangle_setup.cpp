@@ -267,6 +267,14 @@ void setupInsideEdgeTri(const WinVertex& v0, const WinVertex& v1, const WinVerte
     }
 }
 
+void setupInsideLane(const InsideBatch& b, int l, const WinVertex* window, const SnapVertex* snapped,
+                     const SetupParams& params, EdgeTri& out) {
+    const uint32_t i[3] = {b.v[0][l], b.v[1][l], b.v[2][l]};
+    const int64_t sx[3] = {snapped[i[0]].x, snapped[i[1]].x, snapped[i[2]].x};
+    const int64_t sy[3] = {snapped[i[0]].y, snapped[i[1]].y, snapped[i[2]].y};
+    setupInsideEdgeTri(window[i[0]], window[i[1]], window[i[2]], sx, sy, b.clockwise[l] != 0, params, out);
+}
+
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 
 bool haveSetupAvx2() {
@@ -284,18 +292,30 @@ __attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s,
 
 }  // namespace
 
-__attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, const SetupParams& params,
+__attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, const WinVertex* window,
+                                                         const SnapVertex* snapped, const SetupParams& params,
                                                          EdgeTri* const out[4]) {
     const int S = params.subpixelBits;
     const __m128i s = _mm_cvtsi32_si128(S), rest = _mm_cvtsi32_si128(64 - S);
     const __m128i zero = _mm_setzero_si128(), half = _mm_set1_epi32(1 << (S - 1));
-    const auto load = [](const int32_t* p) { return _mm_load_si128(reinterpret_cast<const __m128i*>(p)); };
+    // Each vertex's coordinates loaded into its lane (AVX2's gathers were slower: records.cpp).
+    __m128i sx[3], sy[3];
+    __m256d wx[3], wy[3], wz[3];
+    for (int k = 0; k < 3; ++k) {
+        const SnapVertex *s0 = &snapped[b.v[k][0]], *s1 = &snapped[b.v[k][1]], *s2 = &snapped[b.v[k][2]],
+                         *s3 = &snapped[b.v[k][3]];
+        const WinVertex *w0 = &window[b.v[k][0]], *w1 = &window[b.v[k][1]], *w2 = &window[b.v[k][2]],
+                        *w3 = &window[b.v[k][3]];
+        sx[k] = _mm_setr_epi32(s0->x, s1->x, s2->x, s3->x);
+        sy[k] = _mm_setr_epi32(s0->y, s1->y, s2->y, s3->y);
+        wx[k] = _mm256_setr_pd(w0->x, w1->x, w2->x, w3->x);
+        wy[k] = _mm256_setr_pd(w0->y, w1->y, w2->y, w3->y);
+        wz[k] = _mm256_setr_pd(w0->z, w1->z, w2->z, w3->z);
+    }
     // The sub-triangle's vertices: 0, then 1 and 2 swapped in the clockwise lanes.
-    const __m128i cw = load(b.clockwise);
-    const __m128i x[3] = {load(b.sx[0]), _mm_blendv_epi8(load(b.sx[1]), load(b.sx[2]), cw),
-                          _mm_blendv_epi8(load(b.sx[2]), load(b.sx[1]), cw)};
-    const __m128i y[3] = {load(b.sy[0]), _mm_blendv_epi8(load(b.sy[1]), load(b.sy[2]), cw),
-                          _mm_blendv_epi8(load(b.sy[2]), load(b.sy[1]), cw)};
+    const __m128i cw = _mm_load_si128(reinterpret_cast<const __m128i*>(b.clockwise));
+    const __m128i x[3] = {sx[0], _mm_blendv_epi8(sx[1], sx[2], cw), _mm_blendv_epi8(sx[2], sx[1], cw)};
+    const __m128i y[3] = {sy[0], _mm_blendv_epi8(sy[1], sy[2], cw), _mm_blendv_epi8(sy[2], sy[1], cw)};
     // The box (32 bits suffice: |coordinate| <= 2^29), as makeEdgeTri: ceilShift(m - half) is
     // -((half - m) >> S).
     const __m128i minx = _mm_min_epi32(_mm_min_epi32(x[0], x[1]), x[2]);
@@ -331,11 +351,9 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
         _mm256_store_si256(reinterpret_cast<__m256i*>(ec[k]), floorShift4(c, s, rest));
     }
     // The depth plane, as planeFrom, in the triangle's own vertex order.
-    const __m256d x0 = _mm256_load_pd(b.x[0]), y0 = _mm256_load_pd(b.y[0]), z0 = _mm256_load_pd(b.z[0]);
-    const __m256d x1 = _mm256_sub_pd(_mm256_load_pd(b.x[1]), x0), y1 = _mm256_sub_pd(_mm256_load_pd(b.y[1]), y0);
-    const __m256d z1 = _mm256_sub_pd(_mm256_load_pd(b.z[1]), z0);
-    const __m256d x2 = _mm256_sub_pd(_mm256_load_pd(b.x[2]), x0), y2 = _mm256_sub_pd(_mm256_load_pd(b.y[2]), y0);
-    const __m256d z2 = _mm256_sub_pd(_mm256_load_pd(b.z[2]), z0);
+    const __m256d x0 = wx[0], y0 = wy[0], z0 = wz[0];
+    const __m256d x1 = _mm256_sub_pd(wx[1], x0), y1 = _mm256_sub_pd(wy[1], y0), z1 = _mm256_sub_pd(wz[1], z0);
+    const __m256d x2 = _mm256_sub_pd(wx[2], x0), y2 = _mm256_sub_pd(wy[2], y0), z2 = _mm256_sub_pd(wz[2], z0);
     const __m256d det = _mm256_sub_pd(_mm256_mul_pd(x1, y2), _mm256_mul_pd(x2, y1));
     const __m256d dzdx = _mm256_div_pd(_mm256_sub_pd(_mm256_mul_pd(z1, y2), _mm256_mul_pd(z2, y1)), det);
     const __m256d dzdy = _mm256_div_pd(_mm256_sub_pd(_mm256_mul_pd(x1, z2), _mm256_mul_pd(x2, z1)), det);
@@ -354,11 +372,7 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
     for (int l = 0; l < 4; ++l) {
         EdgeTri& e = *out[l];
         if (!(planeOk >> l & 1)) {
-            const WinVertex v[3] = {{b.x[0][l], b.y[0][l], b.z[0][l]},
-                                    {b.x[1][l], b.y[1][l], b.z[1][l]},
-                                    {b.x[2][l], b.y[2][l], b.z[2][l]}};
-            const int64_t sx[3] = {b.sx[0][l], b.sx[1][l], b.sx[2][l]}, sy[3] = {b.sy[0][l], b.sy[1][l], b.sy[2][l]};
-            setupInsideEdgeTri(v[0], v[1], v[2], sx, sy, b.clockwise[l] != 0, params, e);
+            setupInsideLane(b, l, window, snapped, params, e);
             continue;
         }
         for (int k = 0; k < 3; ++k) {
@@ -370,7 +384,8 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
         e.x1 = uint16_t(box[1][l]);
         e.y0 = uint16_t(box[2][l]);
         e.y1 = uint16_t(box[3][l]);
-        e.plane = DepthPlane{b.x[0][l], b.y[0][l], b.z[0][l], gx[l], gy[l]};
+        const WinVertex& v0 = window[b.v[0][l]];
+        e.plane = DepthPlane{v0.x, v0.y, v0.z, gx[l], gy[l]};
     }
 }
 
@@ -380,7 +395,8 @@ bool haveSetupAvx2() {
     return false;
 }
 
-void setupInsideEdgeTri4(const InsideBatch&, const SetupParams&, EdgeTri* const[4]) {
+void setupInsideEdgeTri4(const InsideBatch&, const WinVertex*, const SnapVertex*, const SetupParams&,
+                         EdgeTri* const[4]) {
     CULLIDE_CHECK(false, "setupInsideEdgeTri4 without AVX2");
 }
 

@@ -13,6 +13,16 @@ struct WinVertex {
     double x, y, z;  // GL window coordinates (OrthoView::toWindow)
 };
 
+// A vertex snapped once (rule 3); `inside` when it needs no clipping (then |x|, |y| <= 2^29).
+// `beyond`: the sides of the viewport it lies beyond (kBeyond*), as trivialReject tests them: three
+// inside vertices beyond one common side make a rejected triangle (inside vertices are finite and
+// within the depth range, trivialReject's other tests).
+struct SnapVertex {
+    int32_t x, y;
+    bool inside;
+    uint8_t beyond;
+};
+
 // Rule 6: z(x, y) = (z0 + dzdy*(y - y0)) + dzdx*(x - x0) at pixel centres, in this association.
 struct DepthPlane {
     double x0 = 0, y0 = 0, z0 = 0, dzdx = 0, dzdy = 0;
@@ -105,20 +115,26 @@ bool makeEdgeTri(const SnappedTri& t, const SetupParams& params, EdgeTri& out);
 void setupInsideEdgeTri(const WinVertex& v0, const WinVertex& v1, const WinVertex& v2, const int64_t sx[3],
                         const int64_t sy[3], bool clockwise, const SetupParams& params, EdgeTri& out);
 
-// Four such triangles side by side (lane l of each array), for setupInsideEdgeTri4.
+// Up to four such triangles side by side, for setupInsideEdgeTri4: lane l is the triangle whose
+// vertex k is window[v[k][l]] (snapped[v[k][l]] snapped) of the arrays the batch is set up from.
 struct InsideBatch {
-    alignas(32) double x[3][4], y[3][4], z[3][4];  // window coordinates of vertex k
-    alignas(16) int32_t sx[3][4], sy[3][4];  // snapped coordinates of vertex k
+    uint32_t v[3][4];  // vertex indices
     alignas(16) int32_t clockwise[4];  // -1 when clockwise, else 0
 };
+
+// setupInsideEdgeTri of lane l of `batch`.
+void setupInsideLane(const InsideBatch& batch, int l, const WinVertex* window, const SnapVertex* snapped,
+                     const SetupParams& params, EdgeTri& out);
 
 // Whether this CPU runs the AVX2 setup (setupInsideEdgeTri4, and the count pass's eight-wide
 // form in records.cpp).
 bool haveSetupAvx2();
 
-// setupInsideEdgeTri on the four triangles of `batch` at once with AVX2 (haveSetupAvx2()):
-// the same integer and double operations in the same order (no FMA), so the same four records
-// bit for bit. A lane whose depth plane needs planeFrom's fallback is set up by the scalar step.
-void setupInsideEdgeTri4(const InsideBatch& batch, const SetupParams& params, EdgeTri* const out[4]);
+// setupInsideEdgeTri on the four triangles of `batch` at once with AVX2 (haveSetupAvx2()), their
+// vertices read from `window` and `snapped`: the same integer and double operations in the same
+// order (no FMA), so the same four records bit for bit. A lane whose depth plane needs
+// planeFrom's fallback is set up by the scalar step.
+void setupInsideEdgeTri4(const InsideBatch& batch, const WinVertex* window, const SnapVertex* snapped,
+                         const SetupParams& params, EdgeTri* const out[4]);
 
 }  // namespace cullide::raster::detail
