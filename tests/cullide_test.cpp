@@ -618,28 +618,35 @@ TEST(Cullide, AdaptiveViewportFollowsTheRule) {
 }
 
 // The view is fitted tightly: the PCS's projected bounds touch the viewport (square pixels), and
-// its depth extent maps inside (0, 1) with margins, never onto the cleared far value.
+// its depth extent maps inside (0, 1) with margins, never onto the cleared far value. In each of
+// the six axis directions (whose bounds come from the points' box, permuted and negated: a wrong
+// axis or sign misses this) and one oblique direction (the dot products), on a box off the origin
+// in every axis.
 TEST(Cullide, FitViewIsTight) {
     const Mesh m = box(Vec3f(-1, -2, 3), Vec3f(5, 2, 4));
     const TriangleRange all{0, uint32_t(m.triangles.size())};
-    const OrthoView v = fitView(m.positions, m.triangles, {&all, 1}, Vec3d(0, 0, 1), 300, 100, DepthFormat::unorm(16));
-    double xmin = 1e9, xmax = -1e9, ymin = 1e9, ymax = -1e9, zmin = 1e9, zmax = -1e9;
-    for (const Vec3f& p : m.positions) {
-        const Vec3d w = v.toWindow(p);
-        xmin = std::min(xmin, w.x()), xmax = std::max(xmax, w.x());
-        ymin = std::min(ymin, w.y()), ymax = std::max(ymax, w.y());
-        zmin = std::min(zmin, w.z()), zmax = std::max(zmax, w.z());
+    for (const Vec3d& dir : {Vec3d(0, 0, 1), Vec3d(0, 0, -1), Vec3d(1, 0, 0), Vec3d(-1, 0, 0), Vec3d(0, 1, 0),
+                             Vec3d(0, -1, 0), Vec3d(0.3, -1, 0.2)}) {
+        SCOPED_TRACE(testing::Message() << "direction " << dir.transpose());
+        const OrthoView v = fitView(m.positions, m.triangles, {&all, 1}, dir, 300, 100, DepthFormat::unorm(16));
+        double xmin = 1e9, xmax = -1e9, ymin = 1e9, ymax = -1e9, zmin = 1e9, zmax = -1e9;
+        for (const Vec3f& p : m.positions) {
+            const Vec3d w = v.toWindow(p);
+            xmin = std::min(xmin, w.x()), xmax = std::max(xmax, w.x());
+            ymin = std::min(ymin, w.y()), ymax = std::max(ymax, w.y());
+            zmin = std::min(zmin, w.z()), zmax = std::max(zmax, w.z());
+        }
+        // The frame's right/up may be either world axis; whichever extent limits the pixel size
+        // fills its side of the viewport exactly and the other is centred.
+        const bool xFills = std::abs(xmin) < 1e-9 && std::abs(xmax - 300) < 1e-9;
+        const bool yFills = std::abs(ymin) < 1e-9 && std::abs(ymax - 100) < 1e-9;
+        EXPECT_TRUE(xFills || yFills) << xmin << " " << xmax << " " << ymin << " " << ymax;
+        EXPECT_NEAR(xmin + xmax, 300, 1e-9);
+        EXPECT_NEAR(ymin + ymax, 100, 1e-9);
+        EXPECT_GT(zmin * 65535, 1.5);
+        EXPECT_LT(zmax * 65535, 65535 - 1.5);
+        EXPECT_NEAR((v.xmax - v.xmin) / 300, (v.ymax - v.ymin) / 100, 1e-12) << "square pixels";
     }
-    // The frame's right/up may be either world axis; whichever extent limits the pixel size
-    // fills its side of the viewport exactly and the other is centred.
-    const bool xFills = std::abs(xmin) < 1e-9 && std::abs(xmax - 300) < 1e-9;
-    const bool yFills = std::abs(ymin) < 1e-9 && std::abs(ymax - 100) < 1e-9;
-    EXPECT_TRUE(xFills || yFills) << xmin << " " << xmax << " " << ymin << " " << ymax;
-    EXPECT_NEAR(xmin + xmax, 300, 1e-9);
-    EXPECT_NEAR(ymin + ymax, 100, 1e-9);
-    EXPECT_GT(zmin * 65535, 1.5);
-    EXPECT_LT(zmax * 65535, 65535 - 1.5);
-    EXPECT_NEAR((v.xmax - v.xmin) / 300, (v.ymax - v.ymin) / 100, 1e-12) << "square pixels";
 }
 
 // --- Views per cluster (ViewMode::Clustered) ---

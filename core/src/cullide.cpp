@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -341,9 +342,51 @@ OrthoView frameOf(const Vec3d& dir, int width, int height, const DepthFormat& de
 
 // The bounds in `view`'s frame of the points that `each(i, f)` passes to f for block i of
 // `blocks`, per block in parallel; min and max are exact, so the result is the same for any split.
+//
+// A frame whose rows are signed world axes (the `axes` directions): a row's projection right.p is
+// the coordinate times +-1 (the dot product's other terms are zeros), so the bounds are the
+// points' float box, permuted and negated: the same numbers, but for the sign of a zero, which
+// fitBox's arithmetic does not see. That is a third of the work per point (a fit was 3% of a
+// prune on one thread).
 template <typename Each>
 std::pair<Vec3d, Vec3d> projectedBounds(const OrthoView& view, size_t blocks, const Each& each) {
     constexpr double inf = std::numeric_limits<double>::infinity();
+    int axis[3], sign[3];
+    bool axisFrame = true;
+    const Vec3d* rows[3] = {&view.right, &view.up, &view.dir};
+    for (int r = 0; r < 3 && axisFrame; ++r) {
+        int nonZero = 0;
+        for (int k = 0; k < 3; ++k)
+            if ((*rows[r])[k] != 0) axis[r] = k, ++nonZero;
+        axisFrame = nonZero == 1 && std::abs((*rows[r])[axis[r]]) == 1.0;
+        if (axisFrame) sign[r] = (*rows[r])[axis[r]] > 0 ? 1 : -1;
+    }
+    if (axisFrame) {
+        constexpr float finf = std::numeric_limits<float>::infinity();
+        std::vector<std::array<float, 6>> boxes(blocks);
+        parallelFor(0, blocks, 1, [&](const auto& block) {
+            for (size_t i = block.begin(); i != block.end(); ++i) {
+                float lo[3] = {finf, finf, finf}, hi[3] = {-finf, -finf, -finf};
+                each(i, [&](const Vec3f& point) {
+                    for (int k = 0; k < 3; ++k) {
+                        lo[k] = std::min(lo[k], point[k]);
+                        hi[k] = std::max(hi[k], point[k]);
+                    }
+                });
+                boxes[i] = {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
+            }
+        });
+        float lo[3] = {finf, finf, finf}, hi[3] = {-finf, -finf, -finf};
+        for (const auto& b : boxes)
+            for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], b[k]), hi[k] = std::max(hi[k], b[k + 3]);
+        Vec3d qlo, qhi;
+        for (int r = 0; r < 3; ++r) {
+            const double l = lo[axis[r]], h = hi[axis[r]];
+            qlo[r] = sign[r] > 0 ? l : -h;
+            qhi[r] = sign[r] > 0 ? h : -l;
+        }
+        return {qlo, qhi};
+    }
     std::vector<std::pair<Vec3d, Vec3d>> bounds(blocks);
     parallelFor(0, blocks, 1, [&](const auto& block) {
         for (size_t i = block.begin(); i != block.end(); ++i) {
