@@ -242,6 +242,12 @@ TEST(CpuBackend, RejectsBadOptions) {
     o.threads = -1;
     EXPECT_THROW(makeCpuBackend(o), InputError);
     EXPECT_NE(makeCpuBackend()->describe().find("8 subpixel bits"), std::string::npos);
+    // The thread count as a reader says it ("1 threads" once).
+    for (const auto& [threads, words] : {std::pair{0, "default threads"}, {1, "1 thread)"}, {4, "4 threads)"}}) {
+        o = {};
+        o.threads = threads;
+        EXPECT_NE(makeCpuBackend(o)->describe().find(words), std::string::npos) << makeCpuBackend(o)->describe();
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

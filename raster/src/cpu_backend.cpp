@@ -153,7 +153,9 @@ public:
             " fill rule";
         if (!options_.scalarReference)
             s += ", " + std::to_string(options_.tileSize) + " px tiles, " +
-                (options_.threads > 0 ? std::to_string(options_.threads) : std::string("default")) + " threads";
+                (options_.threads == 1      ? std::string("1 thread")
+                     : options_.threads > 0 ? std::to_string(options_.threads) + " threads"
+                                            : std::string("default threads"));
         return s + ")";
     }
 
