@@ -33,12 +33,6 @@ using cullide::test::box;
 using cullide::test::rotation;
 using cullide::test::sceneOf;
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define CULLIDE_SANITIZED 1
-#else
-#define CULLIDE_SANITIZED 0
-#endif
-
 namespace {
 
 // A unit icosphere subdivided `levels` times (20 * 4^levels triangles), closed, no self-intersection.

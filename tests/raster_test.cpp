@@ -8,6 +8,7 @@
 #include "cullide/raster/png.h"
 #include "cullide/raster/rules.h"
 
+#include "test_util.h"
 #include "window_geometry.h"
 
 #include <gtest/gtest.h>
@@ -17,12 +18,6 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
-
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define CULLIDE_SANITIZED 1
-#else
-#define CULLIDE_SANITIZED 0
-#endif
 
 namespace cullide::raster {
 namespace {

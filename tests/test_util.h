@@ -8,6 +8,13 @@
 #include <string>
 #include <utility>
 
+// 1 in the AddressSanitizer and ThreadSanitizer builds, where the heaviest tests run smaller cases.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define CULLIDE_SANITIZED 1
+#else
+#define CULLIDE_SANITIZED 0
+#endif
+
 namespace cullide::test {
 
 // CULLIDE_TEST_DATA_DIR "/" relative, e.g. testData("good/polys.off").
