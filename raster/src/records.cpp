@@ -133,9 +133,9 @@ struct Reserved {
 };
 
 //
-// `wholeChunk(lo, hi, slot, recs, tiles, scratch)` may set up a chunk's triangles [lo, hi) in one
-// go instead (writing their flags, begin and end, and the records of its slot, which starts at
-// index `slot`): it returns their records, or -1 to leave the chunk to setupOne.
+// `wholeChunk(lo, hi, slot, cap, recs, tiles, scratch)` may set up a chunk's triangles [lo, hi) in
+// one go instead (writing their flags, begin and end, and the records of its slot, which starts at
+// index `slot` and holds `cap`): it returns their records, or -1 to leave the chunk to setupOne.
 template <typename Scratch, typename Rec, typename CountRange, typename SetupOne, typename FinishChunk,
           typename WholeChunk>
 void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, const CountRange& countRange,
@@ -170,7 +170,7 @@ void buildRecords(RecordSet<Rec>& set, size_t triangles, const TileGrid& grid, c
             const size_t slot = set.slotStart[ci], cap = set.slotStart[ci + 1] - slot;
             Rec* const recs = set.records.data() + slot;
             TileRect* const tiles = set.tiles.data() + slot;
-            if (const int64_t whole = wholeChunk(chunks[ci][0], chunks[ci][1], slot, recs, tiles, scratch);
+            if (const int64_t whole = wholeChunk(chunks[ci][0], chunks[ci][1], slot, cap, recs, tiles, scratch);
                 whole >= 0) {
                 std::fill(tiles + whole, tiles + cap, kNoTiles);
                 set.used[ci] = uint32_t(whole);
@@ -254,7 +254,8 @@ __attribute__((target("avx2"))) uint32_t countHints8(const Triangle* tris, const
         for (int l = 0; l < 8; ++l) w[l] = words + 3 * size_t(tris[l][k]);
         x[k] = _mm256_setr_epi32(w[0][0], w[1][0], w[2][0], w[3][0], w[4][0], w[5][0], w[6][0], w[7][0]);
         y[k] = _mm256_setr_epi32(w[0][1], w[1][1], w[2][1], w[3][1], w[4][1], w[5][1], w[6][1], w[7][1]);
-        f = _mm256_and_si256(f, _mm256_setr_epi32(w[0][2], w[1][2], w[2][2], w[3][2], w[4][2], w[5][2], w[6][2], w[7][2]));
+        f = _mm256_and_si256(f,
+                             _mm256_setr_epi32(w[0][2], w[1][2], w[2][2], w[3][2], w[4][2], w[5][2], w[6][2], w[7][2]));
     }
     const __m256i zero = _mm256_setzero_si256(), byte = _mm256_set1_epi32(0xFF);
     const __m256i inside = _mm256_cmpeq_epi32(_mm256_and_si256(f, byte), _mm256_set1_epi32(1));
@@ -404,7 +405,8 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
         // branch per triangle (whether a small triangle holds a pixel centre is a coin toss, so
         // the branch mispredicted half the time), then the one-record triangles are set up four
         // at a time from a list. The same records and flags as setupOne's.
-        [&](uint32_t lo, uint32_t hi, size_t slot, EdgeTri* recs, TileRect* tiles, SubTriangles& scratch) -> int64_t {
+        [&](uint32_t lo, uint32_t hi, size_t slot, size_t cap, EdgeTri* recs, TileRect* tiles,
+            SubTriangles& scratch) -> int64_t {
             if (!batched) return -1;
             uint8_t any = 0;
             for (uint32_t t = lo; t < hi; ++t) any |= hint[t];
@@ -419,9 +421,9 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
                 n += one;
                 out.end[t] = uint32_t(slot) + n;
             }
+            CULLIDE_CHECK(n == cap, "setupDrawn: a chunk's records differ from its count");
             InsideBatch& b = scratch.batch;
-            uint32_t k = 0;
-            for (; k < n; ++k) {
+            for (uint32_t k = 0; k < n; ++k) {
                 const int l = scratch.pending++;
                 const uint32_t t = ones[k];
                 const Triangle& tri = in.triangles[t];
@@ -455,7 +457,8 @@ void setupConservativeDrawn(const CommandList& list, const SetupInput& in, const
             });
             return kept ? uint8_t(0) : uint8_t(kRejected);
         },
-        [](NoScratch&) {}, [](uint32_t, uint32_t, size_t, ConsRec*, TileRect*, NoScratch&) { return int64_t(-1); });
+        [](NoScratch&) {},
+        [](uint32_t, uint32_t, size_t, size_t, ConsRec*, TileRect*, NoScratch&) { return int64_t(-1); });
 }
 
 }  // namespace cullide::raster::detail
