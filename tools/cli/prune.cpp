@@ -8,6 +8,7 @@
 #include "cullide/error.h"
 #include "cullide/file_io.h"
 #include "cullide/mesh_io.h"
+#include "cullide/parallel.h"
 #include "cullide/options.h"
 #include "cullide/provenance.h"
 #include "cullide/raster/backends.h"
@@ -16,6 +17,7 @@
 #include "cullide/study/study.h"
 
 #include <nlohmann/json.hpp>
+#include <oneapi/tbb/task_arena.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -50,7 +52,7 @@ void writePcsPly(const Scene& scene, const std::vector<PcsTriangle>& pcs, const 
     writePly(all.mesh, path, w);
 }
 
-int runPrune(const PruneOptions& o) {
+int runPruneFrames(const PruneOptions& o) {
     const CullideOptions options = parseCullideOptions(o.cullide);
     const std::unique_ptr<DepthBackend> made = raster::makeBackend(o.backend, o.threads);
     // --max-viewport: the backend as one with that limit would look; larger calls are drawn in tiles.
@@ -243,6 +245,16 @@ int runPrune(const PruneOptions& o) {
     return guaranteeBroken ? 1 : 0;
 }
 
+// --threads N: the whole run on N worker threads (the hierarchies, the view fits, the oracle of
+// --check, and the CPU backend's own N), as the study runs each of its runs; before, only the
+// backend was limited and `--threads 1` built the hierarchies on every core. The results are the
+// same for any N.
+int runPrune(const PruneOptions& o) {
+    if (o.threads <= 0) return runPruneFrames(o);
+    tbb::task_arena arena(o.threads);
+    return executeIn(arena, [&] { return runPruneFrames(o); });
+}
+
 }  // namespace
 
 void addPruneCommand(CLI::App& app, Action& action) {
@@ -256,7 +268,10 @@ void addPruneCommand(CLI::App& app, Action& action) {
            "cpu (the reference rasterizer) | gl (OpenGL 4.5 through headless EGL) | vulkan (Vulkan 1.1+, headless)")
         ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
-    sub->add_option("--threads", o->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));
+    sub->add_option("--threads", o->threads,
+                    "Worker threads of the whole run: hierarchies, view fits, the CPU backend (0: all cores; 1 to "
+                    "1024)")
+        ->check(CLI::Range(0, 1024));
     sub->add_option("--max-viewport", o->maxViewport,
                     "Draw as a backend whose largest viewport side is N pixels: calls larger than that in tiles, "
                     "the same PCS (1.." +
