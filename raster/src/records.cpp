@@ -366,6 +366,15 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
         for (int l = 0; l < scratch.pending; ++l) *scratch.tiles[l] = tileRectOf(*scratch.records[l], grid);
         scratch.pending = 0;
     };
+    // Triangle t (hint h: kHintOne) joins the batch, to fill `record` and `tiles` when it is full.
+    auto enqueue = [&](SubTriangles& scratch, uint32_t t, uint8_t h, EdgeTri* record, TileRect* tiles) {
+        const int l = scratch.pending++;
+        for (int k = 0; k < 3; ++k) scratch.batch.v[k][l] = in.triangles[t][k];
+        scratch.batch.clockwise[l] = h & kHintCw ? -1 : 0;
+        scratch.records[l] = record;
+        scratch.tiles[l] = tiles;
+        if (scratch.pending == 4) flush(scratch);
+    };
     buildRecords<SubTriangles>(
         out, in.triangles.size(), in.grid, countRange,
         [&](uint32_t t, SubTriangles& scratch, auto&& emit, auto&& reserve) {
@@ -374,20 +383,14 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
             const Triangle& tri = in.triangles[t];
             const WinVertex &v0 = in.window[tri[0]], &v1 = in.window[tri[1]], &v2 = in.window[tri[2]];
             if (h & kHintOne) {  // area and a centre, so not rejected: one record, flags 0
-                const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
                 if (batched) {
                     if (const Reserved<EdgeTri> r = reserve(); r.record) {
-                        const int l = scratch.pending++;
-                        InsideBatch& b = scratch.batch;
-                        for (int k = 0; k < 3; ++k) b.v[k][l] = tri[k];
-                        b.clockwise[l] = h & kHintCw ? -1 : 0;
-                        scratch.records[l] = r.record;
-                        scratch.tiles[l] = r.tiles;
-                        if (scratch.pending == 4) flush(scratch);
+                        enqueue(scratch, t, h, r.record, r.tiles);
                         return uint8_t(0);
                     }
                     flush(scratch);  // the slot is full: the records waiting go in before emit moves them
                 }
+                const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
                 const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
                 emit([&](EdgeTri& e) { return setupInsideEdgeTri(v0, v1, v2, sx, sy, h & kHintCw, params, e), true; });
                 return uint8_t(0);
@@ -415,24 +418,14 @@ void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri
             uint32_t n = 0;
             for (uint32_t t = lo; t < hi; ++t) {
                 const uint8_t h = hint[t];
-                const uint32_t one = (h >> 6) & 1;  // kHintOne
+                const uint32_t one = (h & kHintOne) != 0;
                 out.begin[t] = uint32_t(slot) + n;
                 ones[n] = t;
                 n += one;
                 out.end[t] = uint32_t(slot) + n;
             }
             CULLIDE_CHECK(n == cap, "setupDrawn: a chunk's records differ from its count");
-            InsideBatch& b = scratch.batch;
-            for (uint32_t k = 0; k < n; ++k) {
-                const int l = scratch.pending++;
-                const uint32_t t = ones[k];
-                const Triangle& tri = in.triangles[t];
-                for (int c = 0; c < 3; ++c) b.v[c][l] = tri[c];
-                b.clockwise[l] = hint[t] & kHintCw ? -1 : 0;
-                scratch.records[l] = recs + k;
-                scratch.tiles[l] = tiles + k;
-                if (scratch.pending == 4) flush(scratch);
-            }
+            for (uint32_t k = 0; k < n; ++k) enqueue(scratch, ones[k], hint[ones[k]], recs + k, tiles + k);
             flush(scratch);
             // Last, as the hints are the flags' array: 0 with one record, else the flags already.
             for (uint32_t t = lo; t < hi; ++t) hint[t] &= uint8_t(~(kHintOne | kHintCw));
