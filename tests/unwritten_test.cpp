@@ -16,13 +16,14 @@ using cullide::UnwrittenVector;
 // advised) must start on a 2 MiB boundary and be writable to its end; freeing must use the same
 // alignment (ASan reports a mismatch) or unmap exactly what was mapped.
 // Both kinds: from malloc, and with pages of their own (mapped, then the unaligned head and tail
-// of the mapping unmapped again).
+// of the mapping unmapped again; the mapping ends on a whole 2 MiB page: sizes just above and at
+// 2 MiB, and 2.5 MiB).
 template <bool kOwnPages>
 void expectAligned() {
     struct alignas(64) Record {
         float x[16];
     };
-    for (size_t n : {size_t(0), size_t(1), size_t(1000), size_t(5000), size_t(40000)}) {
+    for (size_t n : {size_t(0), size_t(1), size_t(1000), size_t(5000), size_t(32768), size_t(32769), size_t(40000)}) {
         UnwrittenVector<Record, kOwnPages> b(n);
         EXPECT_EQ(b.size(), n);
         EXPECT_EQ(reinterpret_cast<uintptr_t>(b.data()) % 64, 0u);

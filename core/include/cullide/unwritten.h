@@ -10,8 +10,13 @@
 //
 // From 2 MiB on, an array is 2 MiB aligned and asks for transparent huge pages (MADV_HUGEPAGE,
 // advice only: no error if refused): one page fault per 2 MiB instead of one per 4 KiB when it is
-// first written (4 KiB faults were a fifth of the 1M oracle's time). Only whole 2 MiB pages inside
-// the array are advised, so its memory use stays the same.
+// first written (4 KiB faults were a fifth of the 1M oracle's time). From malloc, only whole 2 MiB
+// pages inside the array are advised, so its memory use stays the same. An array with pages of its
+// own (below) maps and advises whole 2 MiB pages to its end: the last one may hold up to 2 MiB
+// that the array does not use, but its tail is no longer hundreds of 4 KiB faults (a 1M
+// hierarchy build's arrays of 3.8 and 11.4 MiB had 1.8 and 1.4 MiB in 4 KiB pages each: 2,600
+// faults; with whole huge pages its BM_Hierarchy time fell from 160-183 to 137-146 ms, and the 1M
+// prune's peak memory rose by 0.3 MB).
 //
 // An array may also map its own pages from 256 KiB on (kOwnPages), which go back to the system
 // when it is freed, whatever malloc's heuristics: an array of a few MiB freed from malloc's heap
@@ -39,7 +44,11 @@ namespace cullide {
 template <typename T, bool kOwnPages = false>
 struct UnwrittenAllocator {
 private:
-    static size_t mappedBytes(size_t bytes) { return (bytes + 4095) & ~size_t(4095); }
+    // An own mapping of 2 MiB or more ends on a whole huge page (see allocate()).
+    static size_t mappedBytes(size_t bytes) {
+        const size_t page = bytes >= kHuge ? kHuge : 4096;
+        return (bytes + page - 1) & ~(page - 1);
+    }
 
 public:
     static_assert(std::is_trivially_destructible_v<T>, "elements are never destroyed one by one");
@@ -79,7 +88,7 @@ public:
         const uintptr_t aligned = (start + kHuge - 1) & ~uintptr_t(kHuge - 1);
         if (aligned > start) munmap(p, aligned - start);
         if (const size_t tail = start + extra - aligned) munmap(reinterpret_cast<void*>(aligned + len), tail);
-        madvise(reinterpret_cast<void*>(aligned), bytes / kHuge * kHuge, MADV_HUGEPAGE);
+        madvise(reinterpret_cast<void*>(aligned), len, MADV_HUGEPAGE);
         return reinterpret_cast<T*>(aligned);
     }
     void deallocate(T* p, size_t n) noexcept {
