@@ -1,4 +1,4 @@
-// Tests for core/src/file_io.cpp: all-or-nothing writes, and what a failed one says.
+// Tests for core/src/file_io.cpp: whole reads, all-or-nothing writes, and what a failed one says.
 #include "cullide/file_io.h"
 
 #include "cullide/error.h"
@@ -48,6 +48,46 @@ TEST(FileIo, MissingFolderIsNamed) {
             << e.what();
     }
     EXPECT_FALSE(fs::exists(missing.parent_path()));
+}
+
+// Trap: readFile reads a regular file's size first, into one buffer (the middle of a large one
+// advised to huge pages), then reads on in 64 KiB steps for whatever is left. Every size around
+// those steps and pages must come back byte for byte, NUL bytes included: nothing dropped at the
+// end of the first read, nothing read twice.
+TEST(FileIo, ReadsEveryByteOfFilesOfEverySize) {
+    const fs::path d = freshDir("read");
+    for (size_t n : {size_t(0), size_t(1), size_t(65535), size_t(65536), size_t(65537), (size_t(5) << 20) + 7}) {
+        std::string bytes(n, '\0');
+        for (size_t i = 0; i < n; ++i) bytes[i] = char((i * 131 + i / 7) & 0xff);
+        writeFileAtomically(d / "f.bin", bytes);
+        EXPECT_EQ(readFile(d / "f.bin"), bytes) << n << " bytes";
+    }
+}
+
+// Trap: a file may say it is empty and still have bytes (procfs files are regular files of size
+// 0): the size read first must not be taken as the whole file.
+TEST(FileIo, ReadsAFileWhoseSizeSaysNothing) {
+    if (!fs::exists("/proc/self/status")) GTEST_SKIP() << "no /proc";
+    const std::string status = readFile("/proc/self/status");
+    EXPECT_NE(status.find("Name:"), std::string::npos) << status;
+}
+
+// Trap: what cannot be read is said with the path, never an empty string returned.
+TEST(FileIo, UnreadableIsNamed) {
+    const fs::path d = freshDir("unreadable");
+    try {
+        readFile(d / "none.off");
+        FAIL() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.source(), (d / "none.off").string());
+        EXPECT_NE(std::string(e.what()).find("no such file"), std::string::npos) << e.what();
+    }
+    try {
+        readFile(d);
+        FAIL() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("directory"), std::string::npos) << e.what();
+    }
 }
 
 }  // namespace
