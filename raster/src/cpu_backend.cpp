@@ -36,6 +36,7 @@
 #include "reference_path.h"
 #include "tile_kernels.h"
 #include "triangle_setup.h"
+#include "view_cache.h"
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/enumerable_thread_specific.h>
@@ -161,6 +162,7 @@ public:
 
     const CpuBackendOptions& options() const override { return options_; }
     const RasterStats& lastStats() const override { return stats_; }
+    bool lastReplayedView() const override { return replayedView_; }
     bool supportsConservative() const override { return true; }
 
     IntervalImage readIntervals() override {
@@ -182,6 +184,7 @@ public:
         borrowed_ = false;
         windowValid_ = windowAll_ = false;
         magnitude_ = -1;
+        dropViews();
     }
 
     bool borrowGeometry(std::span<const Vec3f> positions, std::span<const Triangle> triangles) override {
@@ -193,6 +196,7 @@ public:
         borrowed_ = true;
         windowValid_ = windowAll_ = false;
         magnitude_ = -1;
+        dropViews();
         return true;
     }
 
@@ -224,6 +228,7 @@ public:
         for (TileOut& out : tileOut_) std::vector<detail::QueryCount>().swap(out.queries);  // one per tile: kept
         frags_.clear();
         conservative_ = {};
+        dropViews();
     }
 
     void setView(const OrthoView& view) override {
@@ -276,8 +281,15 @@ public:
             depthPending_ = false;
         }
         stats_ = RasterStats{};
+        replayedView_ = false;
         std::vector<uint64_t> results;
         inArena([&] {
+            if (!options_.scalarReference)
+                if (const detail::ViewFragments* v = cachedView(list)) {
+                    results = executeFromView(list, *v);
+                    replayedView_ = true;
+                    return;
+                }
             updateWindow(list);
             if (list.conservativeCount() > 0) {
                 ensureIntervals();
@@ -400,13 +412,54 @@ private:
         s.beyond = detail::beyondSides(window_[v], params_);
     }
 
-    // Steps 3-7 (step 1 is execute's, step 2 updateWindow's).
+    // Steps 3-7 (step 1 is execute's, step 2 updateWindow's); a list that draws every triangle
+    // also captures its fragments for later lists under this view (view_cache.h).
     std::vector<uint64_t> executeFast(const CommandList& list) {
         detail::StateWalker walk(state_, list.queryCount());
         setupRecords(list);
         makeEvents(list, walk);
-        runTiles();
+        const bool capture = !viewsFull_ && options_.viewCacheBytes > 0 &&
+            detail::replayable(list, options_.tileSize) && detail::drawsEverything(list, triangles_.size());
+        detail::ViewFragments v;
+        if (capture) {
+            v.view = view_;
+            v.tiles.resize(grid_.count());
+        }
+        runTiles(capture ? &v : nullptr);
+        if (capture) {
+            detail::captureFlags(plain_, triangles_.size(), v);
+            // Over the budget: kept out, and no more captures until the geometry changes (the views
+            // of one geometry are alike in size).
+            if (viewBytes_ + v.bytes() > options_.viewCacheBytes) {
+                viewsFull_ = true;
+            } else {
+                viewBytes_ += v.bytes();
+                views_.push_back(std::move(v));
+            }
+        }
         return sumQueries(list, walk);
+    }
+
+    // The captured fragments for the current view, when `list` may replay them.
+    const detail::ViewFragments* cachedView(const CommandList& list) const {
+        if (views_.empty() || !detail::replayable(list, options_.tileSize)) return nullptr;
+        for (const detail::ViewFragments& v : views_)
+            if (detail::sameView(v.view, view_)) return &v;
+        return nullptr;
+    }
+
+    // Steps 5-7 from captured fragments: no setup, no records.
+    std::vector<uint64_t> executeFromView(const CommandList& list, const detail::ViewFragments& v) {
+        detail::StateWalker walk(state_, list.queryCount());
+        detail::runFromView(list, v, grid_, view_.depth, walk, stats_, depth_.data(), view_.width, view_.height,
+                            tileOut_);
+        return sumQueries(list, walk);
+    }
+
+    void dropViews() {
+        std::vector<detail::ViewFragments>().swap(views_);
+        viewBytes_ = 0;
+        viewsFull_ = false;
     }
 
     // Steps 3 and 4: records of the drawn triangles, binned to tiles.
@@ -423,15 +476,27 @@ private:
         detail::binEvents(grid_, plain, conservative, events_);
     }
 
-    // Step 6: one task per tile.
-    void runTiles() {
+    // Step 6: one task per tile; with `capture`, each tile's fragments into it too.
+    void runTiles(detail::ViewFragments* capture) {
         const bool isFloat = view_.depth.kind == DepthFormat::Kind::Float32;
         const detail::RasterTable table = detail::pickRasterTable(isFloat, options_.simd);
         const detail::TileJob job{events_,      plain_, conservative_, table,       view_.depth, view_.width,
                                   view_.height, grid_,  depth_.data(), ilo_.data(), ihi_.data()};
         parallelFor(0, grid_.count(), 1, [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t tile = r.begin(); tile != r.end(); ++tile)
-                detail::runTile(job, tile, frags_.local(), tileOut_[tile]);
+            detail::TileCapture notes;
+            std::vector<detail::FragGroup> scratch;
+            for (size_t tile = r.begin(); tile != r.end(); ++tile) {
+                detail::FragCache& cache = frags_.local();
+                if (!capture) {
+                    detail::runTile(job, tile, cache, tileOut_[tile]);
+                    continue;
+                }
+                notes.groupBegin.clear(), notes.groupEnd.clear(), notes.ok = true;
+                detail::runTile(job, tile, cache, tileOut_[tile], &notes);
+                // Before this thread's cache moves on to another tile.
+                detail::captureTile(plain_, triangles_.size(), grid_, tile, view_.width, view_.height, cache, notes,
+                                    table, depth_.data(), view_.depth.bits, scratch, capture->tiles[tile]);
+            }
         });
     }
 
@@ -465,6 +530,12 @@ private:
     SetupParams params_;
     std::vector<WinVertex> window_;
     std::vector<SnapVertex> snapped_;  // window_ snapped once per vertex (fast path)
+    // Captured fragments of the whole geometry per view (view_cache.h), their bytes, and whether
+    // a capture went over options_.viewCacheBytes.
+    std::vector<detail::ViewFragments> views_;
+    size_t viewBytes_ = 0;
+    bool viewsFull_ = false;
+    bool replayedView_ = false;  // by the last execute()
     // window_ and snapped_ hold the current view's numbers for every vertex (windowAll_), or for
     // those whose stamp is stamp_; windowValid_: sized, stamp_ this view's.
     bool windowValid_ = false, windowAll_ = false;

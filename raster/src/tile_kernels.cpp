@@ -341,8 +341,6 @@ RasterTable pickRasterTable(bool isFloat, bool simd) {
     return isFloat ? makeTable<ScalarKernel, true>(funcs) : makeTable<ScalarKernel, false>(funcs);
 }
 
-namespace {
-
 // A draw's samples that passed, added to its query's count (the tile's list stays in query order).
 void countQuery(TileOut& out, int32_t query, uint64_t n) {
     if (query < 0 || n == 0) return;
@@ -350,9 +348,7 @@ void countQuery(TileOut& out, int32_t query, uint64_t n) {
     else out.queries.push_back({uint32_t(query), n});
 }
 
-}  // namespace
-
-void runTile(const TileJob& job, size_t tile, FragCache& cache, TileOut& out) {
+void runTile(const TileJob& job, size_t tile, FragCache& cache, TileOut& out, TileCapture* capture) {
     out.queries.clear();
     out.fragments = out.passed = 0;
     const int ts = job.grid.tileSize, W = job.width, H = job.height, bits = job.format.bits;
@@ -417,8 +413,18 @@ void runTile(const TileJob& job, size_t tile, FragCache& cache, TileOut& out) {
                     const int64_t ch = std::min<int>(tri.y1, by1) - std::max<int>(tri.y0, by0) + 1;
                     record = cw <= 0 || ch <= 0 || int64_t(groups + kFragCap - w) >= cw * ch;
                 }
+                FragGroup* const from = w;
                 (record ? table.record : table.raster)[size_t(e.func)](tri, bx0, by0, bx1, by1, depth, size_t(W),
                                                                        e.mask, bits, out.fragments, out.passed, w);
+                if (capture) {  // records met before are kept as first recorded; a gap spoils it
+                    const size_t next = capture->groupBegin.size();
+                    if (p == next && record) {
+                        capture->groupBegin.push_back(uint32_t(from - groups));
+                        capture->groupEnd.push_back(uint32_t(w - groups));
+                    } else if (p >= next) {
+                        capture->ok = false;
+                    }
+                }
             }
             hint = p;
             if (record) {

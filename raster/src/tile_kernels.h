@@ -53,11 +53,24 @@ struct TileJob {
     uint32_t* ihi;
 };
 
+// Adds `n` passed samples to query `query` (none: -1) in the tile's sparse list (in query order).
+void countQuery(TileOut& out, int32_t query, uint64_t n);
+
+// What runTile notes for a capture (view_cache.h): per record of the tile's list, in list order,
+// its recorded groups [groupBegin, groupEnd) in the FragCache. ok: every record so far was
+// rasterized with recording when first met, in list order (else the capture rasterizes the tile
+// again).
+struct TileCapture {
+    std::vector<uint32_t> groupBegin, groupEnd;
+    bool ok = true;
+};
+
 // Runs tile `tile`'s events in order into the buffers, its counts into `out`. For a draw it finds
 // the draw's records in the tile's list by galloping from the previous position (cheap for
 // reducePCS's runs of neighbouring and repeated ranges) and rasterizes them clipped to the tile,
 // recording the fragments in `cache` (the thread's); a later draw of the same records in the
 // tile replays them.
-void runTile(const TileJob& job, size_t tile, FragCache& cache, TileOut& out);
+// With `capture`, notes each record's recorded groups there.
+void runTile(const TileJob& job, size_t tile, FragCache& cache, TileOut& out, TileCapture* capture = nullptr);
 
 }  // namespace cullide::raster::detail

@@ -39,6 +39,12 @@ struct CpuBackendOptions {
     bool scalarReference = false;  // use the scalar reference path instead
     bool simd = true;  // fast path: AVX2 pixel loop and triangle setup where the CPU has it
                        // (the same results bit for bit; false: scalar)
+    // Fast path: memory for the fragments of the whole geometry under the views of lists that drew
+    // every triangle (10 bytes per fragment, ~2.7 MB per 500 x 500 view), so that later lists
+    // under one of those views replay them instead of setting up and rasterizing (Cullide's first
+    // levels; the same results bit for bit; raster/src/view_cache.h). 0: none kept. Emptied when
+    // the geometry changes.
+    size_t viewCacheBytes = size_t(32) << 20;
 };
 
 // What the last execute() did, counted per drawn triangle instance (a triangle drawn twice counts
@@ -77,6 +83,9 @@ public:
     virtual IntervalImage readIntervals() = 0;
     // Counters of the most recent execute() (zero before the first).
     virtual const RasterStats& lastStats() const = 0;
+    // Whether the most recent execute() replayed the fragments captured under its view
+    // (CpuBackendOptions::viewCacheBytes) instead of setting up its triangles.
+    virtual bool lastReplayedView() const = 0;
     // Frees the scratch kept across lists (triangle records, bins, events, fragment caches, window
     // coordinates), keeping geometry, view and buffers; the next execute() allocates it again.
     // For a caller that runs something else large between lists (trace recording).

@@ -1,0 +1,220 @@
+// Fragments of the whole geometry under one view, kept across command lists (view_cache.h).
+#include "view_cache.h"
+
+#include "cullide/parallel.h"
+#include "cullide/raster/rules.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+
+namespace cullide::raster::detail {
+
+bool sameView(const OrthoView& a, const OrthoView& b) {
+    return a.right == b.right && a.up == b.up && a.dir == b.dir && a.xmin == b.xmin && a.xmax == b.xmax &&
+        a.ymin == b.ymin && a.ymax == b.ymax && a.znear == b.znear && a.zfar == b.zfar && a.width == b.width &&
+        a.height == b.height && a.depth == b.depth && a.originX == b.originX && a.originY == b.originY &&
+        a.gridWidth == b.gridWidth && a.gridHeight == b.gridHeight;
+}
+
+bool replayable(const CommandList& list, int tileSize) {
+    return list.conservativeCount() == 0 && tileSize <= 256;
+}
+
+bool drawsEverything(const CommandList& list, size_t triangles) {
+    std::vector<std::array<uint64_t, 2>> ranges;
+    for (const Command& c : list.commands())
+        if (c.op == Command::Op::Draw && c.count > 0) ranges.push_back({c.first, uint64_t(c.first) + c.count});
+    std::sort(ranges.begin(), ranges.end());
+    uint64_t covered = 0;  // [0, covered) is drawn
+    for (const auto& r : ranges) {
+        if (r[0] > covered) return false;
+        covered = std::max(covered, r[1]);
+    }
+    return triangles > 0 && covered == triangles;
+}
+
+namespace {
+
+struct TileBounds {
+    int x0, y0, x1, y1;  // inclusive pixel bounds
+};
+
+TileBounds boundsOf(const TileGrid& grid, size_t tile, int width, int height) {
+    const int ts = grid.tileSize;
+    const int x0 = int(tile % size_t(grid.tilesX)) * ts, y0 = int(tile / size_t(grid.tilesX)) * ts;
+    return {x0, y0, std::min(x0 + ts, width) - 1, std::min(y0 + ts, height) - 1};
+}
+
+}  // namespace
+
+namespace {
+
+// The fragments of groups [g, e) of a record of triangle t, appended to `out` (tile from (x0, y0)).
+void appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t width, uint32_t x0, uint32_t y0,
+                  TileFragments& out) {
+    for (; g != e; ++g)
+        for (uint32_t l = 0; l < 4; ++l) {
+            if (!(g->lanes >> l & 1)) continue;
+            const uint32_t pixel = g->pixel + l, x = pixel % width, y = pixel / width;
+            out.tri.push_back(t);
+            out.z.push_back(g->z[l]);
+            out.at.push_back(uint16_t((y - y0) << 8 | (x - x0)));
+        }
+}
+
+}  // namespace
+
+void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGrid& grid, size_t tile, int width,
+                 int height, const FragCache& cache, const TileCapture& capture, const RasterTable& table,
+                 uint32_t* depth, int bits, std::vector<FragGroup>& scratch, TileFragments& out) {
+    const TileBounds b = boundsOf(grid, tile, width, height);
+    const uint32_t* recs = plain.bins.begin(tile);
+    const size_t n = plain.bins.size(tile);
+    out = {};
+    // The triangle of each record: the first whose records end after it (the tile's records
+    // ascend, and their triangles lie close: a gallop from the last).
+    size_t t = 0;
+    auto triangleOf = [&](uint32_t rec) {
+        t = gallopLowerBound(plain.end.data(), triangles, t, rec + 1);
+        return uint32_t(t);
+    };
+    if (capture.ok && capture.groupBegin.size() == n) {
+        const FragGroup* groups = cache.groups.data();
+        size_t count = 0;  // sized exactly: no spare capacity kept
+        for (size_t p = 0; p < n; ++p)
+            for (uint32_t g = capture.groupBegin[p]; g < capture.groupEnd[p]; ++g)
+                count += size_t(std::popcount(groups[g].lanes));
+        out.tri.reserve(count), out.z.reserve(count), out.at.reserve(count);
+        for (size_t p = 0; p < n; ++p)
+            appendGroups(groups + capture.groupBegin[p], groups + capture.groupEnd[p], triangleOf(recs[p]),
+                         uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), out);
+        return;
+    }
+    // A record's groups in a tile: at most one per pixel of the tile.
+    scratch.resize(size_t(grid.tileSize) * size_t(grid.tileSize));
+    uint64_t fragments = 0, passed = 0;
+    for (size_t p = 0; p < n; ++p) {
+        // ALWAYS without writing: the kernel records every fragment and leaves the buffer as it is
+        // (the scalar one stores each pixel's own value back).
+        FragGroup* w = scratch.data();
+        table.record[size_t(DepthFunc::Always)](plain.records[recs[p]], b.x0, b.y0, b.x1, b.y1, depth, size_t(width),
+                                                false, bits, fragments, passed, w);
+        appendGroups(scratch.data(), w, triangleOf(recs[p]), uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), out);
+    }
+    out.tri.shrink_to_fit(), out.z.shrink_to_fit(), out.at.shrink_to_fit();
+}
+
+void captureFlags(const RecordSet<EdgeTri>& plain, size_t triangles, ViewFragments& out) {
+    for (size_t t = 0; t < triangles; ++t)
+        if (const uint8_t f = plain.flags[t] & (kRejected | kClipped | kZeroArea)) {
+            out.flagged.push_back(uint32_t(t));
+            out.flags.push_back(f);
+        }
+    out.flagged.shrink_to_fit(), out.flags.shrink_to_fit();
+}
+
+namespace {
+
+// A clear or a draw, with the state it runs under.
+struct ViewEvent {
+    bool clear = false;
+    uint32_t clearValue = 0;
+    DepthFunc func = DepthFunc::Less;
+    bool mask = true;
+    int32_t query = -1;
+    uint32_t first = 0, end = 0;  // draw: triangles [first, end)
+};
+
+// The fragments [f, e) of one tile (its pixels from (x0, y0)) under F: replayFragments' test and
+// write, one fragment at a time.
+template <DepthFunc F>
+void replayView(const TileFragments& v, uint32_t f, uint32_t e, uint32_t* depth, size_t stride, int x0, int y0,
+                bool mask, uint64_t& fragments, uint64_t& passed) {
+    uint64_t pass = 0;
+    uint32_t* const origin = depth + size_t(y0) * stride + size_t(x0);
+    for (uint32_t i = f; i < e; ++i) {
+        const uint32_t at = v.at[i];
+        uint32_t& d = origin[size_t(at >> 8) * stride + (at & 0xff)];
+        const uint32_t incoming = v.z[i], stored = d;
+        const bool ok = depthTest(F, incoming, stored);
+        pass += ok;
+        d = ok && mask ? incoming : stored;
+    }
+    fragments += e - f;
+    passed += pass;
+}
+
+using ReplayViewFn = void (*)(const TileFragments&, uint32_t, uint32_t, uint32_t*, size_t, int, int, bool, uint64_t&,
+                              uint64_t&);
+
+template <size_t... F>
+constexpr std::array<ReplayViewFn, 8> replayViewTable(std::index_sequence<F...>) {
+    return {&replayView<DepthFunc(F)>...};
+}
+constexpr std::array<ReplayViewFn, 8> kReplayView = replayViewTable(std::make_index_sequence<8>());
+
+}  // namespace
+
+void runFromView(const CommandList& list, const ViewFragments& frags, const TileGrid& grid, const DepthFormat& format,
+                 StateWalker& walk, RasterStats& stats, uint32_t* depth, int width, int height,
+                 std::vector<TileOut>& tileOut) {
+    std::vector<ViewEvent> events;
+    for (const Command& c : list.commands()) {
+        if (walk.apply(c)) continue;
+        ViewEvent e;
+        if (c.op == Command::Op::Clear) {
+            e.clear = true;
+            e.clearValue = encodeDepth(c.clearDepth, format);
+        } else if (c.op == Command::Op::Draw) {
+            // makeEvents' statistics: per drawn triangle, its flags in this view.
+            ++stats.draws;
+            stats.triangles += c.count;
+            if (c.count == 0) continue;
+            e.func = walk.func();
+            e.mask = walk.mask();
+            e.query = int32_t(walk.query());
+            e.first = c.first;
+            e.end = c.first + c.count;
+            const auto lo = std::lower_bound(frags.flagged.begin(), frags.flagged.end(), e.first);
+            const auto hi = std::lower_bound(lo, frags.flagged.end(), e.end);
+            for (auto it = lo; it != hi; ++it) {
+                const uint8_t f = frags.flags[size_t(it - frags.flagged.begin())];
+                stats.rejected += (f & kRejected) ? 1 : 0;
+                stats.clipped += (f & kClipped) ? 1 : 0;
+                stats.zeroArea += (f & kZeroArea) ? 1 : 0;
+            }
+        } else {
+            continue;  // conservative commands: not replayable (replayable())
+        }
+        events.push_back(e);
+    }
+    parallelFor(0, grid.count(), 1, [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t tile = r.begin(); tile != r.end(); ++tile) {
+            TileOut& out = tileOut[tile];
+            out.queries.clear();
+            out.fragments = out.passed = 0;
+            const TileBounds b = boundsOf(grid, tile, width, height);
+            const TileFragments& tf = frags.tiles[tile];
+            const uint32_t* tri = tf.tri.data();
+            const uint32_t begin = 0, end = uint32_t(tf.tri.size());
+            for (const ViewEvent& e : events) {
+                if (e.clear) {
+                    for (int j = b.y0; j <= b.y1; ++j)
+                        std::fill_n(depth + size_t(j) * size_t(width) + size_t(b.x0), b.x1 - b.x0 + 1, e.clearValue);
+                    continue;
+                }
+                if (begin == end) continue;
+                // The draw's fragments in this tile: those of its triangles, a run (ascending).
+                const uint32_t f = uint32_t(std::lower_bound(tri + begin, tri + end, e.first) - tri);
+                const uint32_t l = uint32_t(std::lower_bound(tri + f, tri + end, e.end) - tri);
+                const uint64_t before = out.passed;
+                kReplayView[size_t(e.func)](tf, f, l, depth, size_t(width), b.x0, b.y0, e.mask, out.fragments,
+                                            out.passed);
+                countQuery(out, e.query, out.passed - before);
+            }
+        }
+    });
+}
+
+}  // namespace cullide::raster::detail

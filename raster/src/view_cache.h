@@ -1,0 +1,91 @@
+// Fragments of the whole geometry under one view, kept across command lists, for the fast path of
+// the CPU backend (cpu_backend.cpp). Private to raster/.
+//
+// Cullide's first levels draw every triangle under the same views, level after level: while the
+// PCS is the whole geometry, each direction's view is the one fitted to the whole geometry
+// (core/src/cullide.cpp, wholeFit), so levels 1 and 2 of a 270k bunny set up and rasterize again,
+// in 12 of its 18 such lists, what level 0 did in the same view. A triangle's fragments and their
+// incoming depths depend only on the triangle, the view and the rasterization options, never on
+// the list or the GL state. So a list that draws every triangle runs as usual and then its
+// fragments are captured, per tile and in record order; a later list under the same view (any
+// draws, any state, no conservative draws) replays them instead of setting up and rasterizing.
+// Within a draw and a tile, the normal path meets the same fragments in the same order (its
+// records in record order, each one's pixels in the kernel's order), so the depth buffer, the
+// counts and the statistics are the same, bit for bit (test Differential.ViewCacheReplaysLaterLists).
+//
+// Memory: 10 bytes per fragment (about 2.7 MB per view of 500 x 500 for a mesh of any size, since
+// small triangles cover each pixel about once), within CpuBackendOptions::viewCacheBytes.
+#pragma once
+
+#include "command_state.h"
+#include "records.h"
+#include "tile_kernels.h"
+
+#include "cullide/depth_backend.h"
+#include "cullide/raster/cpu_backend.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace cullide::raster::detail {
+
+// One tile's fragments: those of its records, in the order of its list (records in triangle
+// order, each one's fragments in its kernel's order).
+struct TileFragments {
+    std::vector<uint32_t> tri;  // per fragment: its triangle (non-decreasing)
+    std::vector<uint32_t> z;  // per fragment: its incoming depth code
+    std::vector<uint16_t> at;  // per fragment: (y - tile's y0) << 8 | (x - tile's x0)
+};
+
+struct ViewFragments {
+    OrthoView view;  // the key (the backend empties the cache when the geometry changes)
+    std::vector<TileFragments> tiles;
+    // The triangles with kRejected, kClipped or kZeroArea, ascending, and those flags (RasterStats).
+    std::vector<uint32_t> flagged;
+    std::vector<uint8_t> flags;
+
+    size_t bytes() const {
+        size_t b = tiles.capacity() * sizeof(TileFragments) + flagged.capacity() * 4 + flags.capacity();
+        for (const TileFragments& t : tiles) b += t.tri.capacity() * 4 + t.z.capacity() * 4 + t.at.capacity() * 2;
+        return b;
+    }
+};
+
+// Whether the two views give the same window coordinates, viewport and depth codes.
+bool sameView(const OrthoView& a, const OrthoView& b);
+
+// Whether `list` may be replayed from a view's fragments: no conservative draws. `tileSize`: the
+// backend's; a fragment's place in its tile takes 8 bits per axis.
+bool replayable(const CommandList& list, int tileSize);
+
+// Whether `list`'s draws cover every one of `triangles` triangles (so a capture holds them all).
+bool drawsEverything(const CommandList& list, size_t triangles);
+
+// A capture, for a list that draws every triangle: the list runs as usual, each tile noting
+// in a TileCapture the groups that runTile recorded for its records (Cullide's lists draw each
+// range at least twice, so the first draw records them), then captureTile turns them into
+// fragments with their triangles, before the thread's FragCache moves on to another tile. A tile
+// whose records were not all recorded when first met (a draw drawn once, too many groups for the
+// cache) is rasterized again under ALWAYS without writing.
+//
+// Tile `tile`'s fragments into `out`: from `cache`'s groups as `capture` locates them, or from its
+// records rasterized again with `table` (`depth` keeps its values; code bits `bits`; `scratch`: a
+// thread's buffer). `width`, `height`: the viewport's.
+void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGrid& grid, size_t tile, int width,
+                 int height, const FragCache& cache, const TileCapture& capture, const RasterTable& table,
+                 uint32_t* depth, int bits, std::vector<FragGroup>& scratch, TileFragments& out);
+
+// The triangles of `plain` (`triangles` of the geometry) with kRejected, kClipped or kZeroArea,
+// into `out`.
+void captureFlags(const RecordSet<EdgeTri>& plain, size_t triangles, ViewFragments& out);
+
+// Steps 5 and 6 of the fast path for `list` from `frags` instead of records: each tile walks the
+// list's clears and draws in order, replaying a draw's fragments (those of its triangles in the
+// tile) under its state. Counts into `tileOut` (one per tile), statistics into `stats`; the query
+// results are then summed as for the normal path.
+void runFromView(const CommandList& list, const ViewFragments& frags, const TileGrid& grid, const DepthFormat& format,
+                 StateWalker& walk, RasterStats& stats, uint32_t* depth, int width, int height,
+                 std::vector<TileOut>& tileOut);
+
+}  // namespace cullide::raster::detail
