@@ -1107,6 +1107,46 @@ TEST(Differential, ViewCacheReplaysLaterLists) {
     }
 }
 
+// Trap: a captured fragment packs its triangle, depth code and place in 64 bits, the triangle on
+// top, and a draw's run is found by comparing against (first << shift) and (end << shift): a
+// draw ending at the last triangle must not overflow that (4096 triangles, float depth and
+// 1024 px tiles take 13 + 32 + 20 bits, one too many: no capture; 512 px tiles fit exactly
+// 63 bits and replay).
+TEST(Differential, ViewCacheAtTheLayoutsLimit) {
+    const RandomScene s = randomScene(77, 100, 90, 4096, 0);
+    CommandList whole, tail;
+    whole.clear(1.0);
+    for (int k = 0; k < 2; ++k) {
+        whole.beginQuery();
+        whole.draw(0, 2048);
+        whole.endQuery();
+        whole.beginQuery();
+        whole.draw(2048, 2048);
+        whole.endQuery();
+    }
+    tail.clear(1.0);
+    tail.depthFunc(DepthFunc::LEqual);
+    for (uint32_t first : {4095u, 100u, 0u}) {
+        tail.beginQuery();
+        tail.draw(first, 4096 - first);
+        tail.endQuery();
+    }
+    const OrthoView view = windowView(100, 90, DepthFormat::float32());
+    CpuBackendOptions ref;
+    ref.scalarReference = true;
+    for (int tile : {512, 1024}) {
+        CpuBackendOptions fast;
+        fast.tileSize = tile;
+        auto a = backendFor(s.geo, view, ref), b = backendFor(s.geo, view, fast);
+        for (const CommandList* list : {&whole, &tail, &whole}) {
+            EXPECT_EQ(a->execute(*list), b->execute(*list)) << "tile " << tile;
+            EXPECT_EQ(a->lastStats(), b->lastStats()) << "tile " << tile;
+        }
+        EXPECT_EQ(b->lastReplayedView(), tile == 512);
+        expectSame({{}, a->readDepth(), {}}, {{}, b->readDepth(), {}}, "tile " + std::to_string(tile));
+    }
+}
+
 // Trap: results depending on scheduling (shared counters, racing tiles, float sums) — identical
 // depth buffers, results and stats for 1, 2 and 8 threads on larger random scenes.
 TEST(Differential, ThreadCountInvariance) {

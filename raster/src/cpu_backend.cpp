@@ -22,6 +22,9 @@
 //      fragments; a later draw of the same records in the tile replays them (frag_cache.h). Query
 //      counts go to a per-tile sparse list of (query, count), in query order (tile_kernels.cpp);
 //   7. sum the per-tile lists into the results (integers: order-free).
+// A list that draws every triangle also captures its fragments per tile; a later list under the
+// same view (Cullide's first levels) replays them in steps 5-6 instead of steps 2-4 and the
+// rasterization (view_cache.h).
 // Every pixel is owned by exactly one tile and processed in command order, so the depth buffer
 // and the counts do not depend on scheduling.
 #include "cullide/raster/cpu_backend.h"
@@ -418,11 +421,13 @@ private:
         detail::StateWalker walk(state_, list.queryCount());
         setupRecords(list);
         makeEvents(list, walk);
-        const bool capture = !viewsFull_ && options_.viewCacheBytes > 0 &&
-            detail::replayable(list, options_.tileSize) && detail::drawsEverything(list, triangles_.size());
+        const detail::FragLayout layout = detail::FragLayout::of(triangles_.size(), options_.tileSize, view_.depth);
+        const bool capture = !viewsFull_ && options_.viewCacheBytes > 0 && layout.axisBits > 0 &&
+            detail::replayable(list) && detail::drawsEverything(list, triangles_.size());
         detail::ViewFragments v;
         if (capture) {
             v.view = view_;
+            v.layout = layout;
             v.tiles.resize(grid_.count());
         }
         runTiles(capture ? &v : nullptr);
@@ -442,7 +447,7 @@ private:
 
     // The captured fragments for the current view, when `list` may replay them.
     const detail::ViewFragments* cachedView(const CommandList& list) const {
-        if (views_.empty() || !detail::replayable(list, options_.tileSize)) return nullptr;
+        if (views_.empty() || !detail::replayable(list)) return nullptr;
         for (const detail::ViewFragments& v : views_)
             if (detail::sameView(v.view, view_)) return &v;
         return nullptr;
@@ -495,7 +500,8 @@ private:
                 detail::runTile(job, tile, cache, tileOut_[tile], &notes);
                 // Before this thread's cache moves on to another tile.
                 detail::captureTile(plain_, triangles_.size(), grid_, tile, view_.width, view_.height, cache, notes,
-                                    table, depth_.data(), view_.depth.bits, scratch, capture->tiles[tile]);
+                                    table, depth_.data(), view_.depth.bits, capture->layout, scratch,
+                                    capture->tiles[tile]);
             }
         });
     }

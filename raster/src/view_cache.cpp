@@ -17,8 +17,17 @@ bool sameView(const OrthoView& a, const OrthoView& b) {
         a.gridWidth == b.gridWidth && a.gridHeight == b.gridHeight;
 }
 
-bool replayable(const CommandList& list, int tileSize) {
-    return list.conservativeCount() == 0 && tileSize <= 256;
+bool replayable(const CommandList& list) {
+    return list.conservativeCount() == 0;
+}
+
+FragLayout FragLayout::of(size_t triangles, int tileSize, const DepthFormat& format) {
+    FragLayout l;
+    l.axisBits = std::bit_width(unsigned(std::max(tileSize, 2) - 1));
+    l.zBits = format.kind == DepthFormat::Kind::Float32 ? 32 : format.bits;
+    l.triBits = std::bit_width(uint64_t(triangles));  // up to `triangles` itself (a draw's end)
+    if (2 * l.axisBits + l.zBits + l.triBits > 64) l.axisBits = 0;
+    return l;
 }
 
 bool drawsEverything(const CommandList& list, size_t triangles) {
@@ -52,14 +61,12 @@ namespace {
 
 // The fragments of groups [g, e) of a record of triangle t, appended to `out` (tile from (x0, y0)).
 void appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t width, uint32_t x0, uint32_t y0,
-                  TileFragments& out) {
+                  const FragLayout& layout, TileFragments& out) {
     for (; g != e; ++g)
         for (uint32_t l = 0; l < 4; ++l) {
             if (!(g->lanes >> l & 1)) continue;
             const uint32_t pixel = g->pixel + l, x = pixel % width, y = pixel / width;
-            out.tri.push_back(t);
-            out.z.push_back(g->z[l]);
-            out.at.push_back(uint16_t((y - y0) << 8 | (x - x0)));
+            out.frag.push_back(layout.pack(t, g->z[l], x - x0, y - y0));
         }
 }
 
@@ -67,7 +74,8 @@ void appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t w
 
 void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGrid& grid, size_t tile, int width,
                  int height, const FragCache& cache, const TileCapture& capture, const RasterTable& table,
-                 uint32_t* depth, int bits, std::vector<FragGroup>& scratch, TileFragments& out) {
+                 uint32_t* depth, int bits, const FragLayout& layout, std::vector<FragGroup>& scratch,
+                 TileFragments& out) {
     const TileBounds b = boundsOf(grid, tile, width, height);
     const uint32_t* recs = plain.bins.begin(tile);
     const size_t n = plain.bins.size(tile);
@@ -85,10 +93,10 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
         for (size_t p = 0; p < n; ++p)
             for (uint32_t g = capture.groupBegin[p]; g < capture.groupEnd[p]; ++g)
                 count += size_t(std::popcount(groups[g].lanes));
-        out.tri.reserve(count), out.z.reserve(count), out.at.reserve(count);
+        out.frag.reserve(count);
         for (size_t p = 0; p < n; ++p)
             appendGroups(groups + capture.groupBegin[p], groups + capture.groupEnd[p], triangleOf(recs[p]),
-                         uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), out);
+                         uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), layout, out);
         return;
     }
     // A record's groups in a tile: at most one per pixel of the tile.
@@ -100,9 +108,10 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
         FragGroup* w = scratch.data();
         table.record[size_t(DepthFunc::Always)](plain.records[recs[p]], b.x0, b.y0, b.x1, b.y1, depth, size_t(width),
                                                 false, bits, fragments, passed, w);
-        appendGroups(scratch.data(), w, triangleOf(recs[p]), uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), out);
+        appendGroups(scratch.data(), w, triangleOf(recs[p]), uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), layout,
+                     out);
     }
-    out.tri.shrink_to_fit(), out.z.shrink_to_fit(), out.at.shrink_to_fit();
+    out.frag.shrink_to_fit();
 }
 
 void captureFlags(const RecordSet<EdgeTri>& plain, size_t triangles, ViewFragments& out) {
@@ -129,24 +138,26 @@ struct ViewEvent {
 // The fragments [f, e) of one tile (its pixels from (x0, y0)) under F: replayFragments' test and
 // write, one fragment at a time.
 template <DepthFunc F>
-void replayView(const TileFragments& v, uint32_t f, uint32_t e, uint32_t* depth, size_t stride, int x0, int y0,
-                bool mask, uint64_t& fragments, uint64_t& passed) {
+void replayView(const uint64_t* f, const uint64_t* e, const FragLayout& layout, uint32_t* depth, size_t stride, int x0,
+                int y0, bool mask, uint64_t& fragments, uint64_t& passed) {
     uint64_t pass = 0;
     uint32_t* const origin = depth + size_t(y0) * stride + size_t(x0);
-    for (uint32_t i = f; i < e; ++i) {
-        const uint32_t at = v.at[i];
-        uint32_t& d = origin[size_t(at >> 8) * stride + (at & 0xff)];
-        const uint32_t incoming = v.z[i], stored = d;
+    const int axis = layout.axisBits, zShift = layout.zShift();
+    const uint64_t axisMask = (uint64_t(1) << axis) - 1, zMask = (uint64_t(1) << layout.zBits) - 1;
+    for (const uint64_t* i = f; i != e; ++i) {
+        const uint64_t v = *i;
+        uint32_t& d = origin[size_t(v >> axis & axisMask) * stride + size_t(v & axisMask)];
+        const uint32_t incoming = uint32_t(v >> zShift & zMask), stored = d;
         const bool ok = depthTest(F, incoming, stored);
         pass += ok;
         d = ok && mask ? incoming : stored;
     }
-    fragments += e - f;
+    fragments += uint64_t(e - f);
     passed += pass;
 }
 
-using ReplayViewFn = void (*)(const TileFragments&, uint32_t, uint32_t, uint32_t*, size_t, int, int, bool, uint64_t&,
-                              uint64_t&);
+using ReplayViewFn = void (*)(const uint64_t*, const uint64_t*, const FragLayout&, uint32_t*, size_t, int, int, bool,
+                              uint64_t&, uint64_t&);
 
 template <size_t... F>
 constexpr std::array<ReplayViewFn, 8> replayViewTable(std::index_sequence<F...>) {
@@ -195,22 +206,22 @@ void runFromView(const CommandList& list, const ViewFragments& frags, const Tile
             out.queries.clear();
             out.fragments = out.passed = 0;
             const TileBounds b = boundsOf(grid, tile, width, height);
-            const TileFragments& tf = frags.tiles[tile];
-            const uint32_t* tri = tf.tri.data();
-            const uint32_t begin = 0, end = uint32_t(tf.tri.size());
+            const std::vector<uint64_t>& tf = frags.tiles[tile].frag;
+            const int triShift = frags.layout.triShift();
             for (const ViewEvent& e : events) {
                 if (e.clear) {
                     for (int j = b.y0; j <= b.y1; ++j)
                         std::fill_n(depth + size_t(j) * size_t(width) + size_t(b.x0), b.x1 - b.x0 + 1, e.clearValue);
                     continue;
                 }
-                if (begin == end) continue;
-                // The draw's fragments in this tile: those of its triangles, a run (ascending).
-                const uint32_t f = uint32_t(std::lower_bound(tri + begin, tri + end, e.first) - tri);
-                const uint32_t l = uint32_t(std::lower_bound(tri + f, tri + end, e.end) - tri);
+                if (tf.empty()) continue;
+                // The draw's fragments in this tile: those of its triangles, a run (the triangle on
+                // top: each fragment of a lower triangle is below first << triShift, the others not).
+                const auto f = std::lower_bound(tf.begin(), tf.end(), uint64_t(e.first) << triShift);
+                const auto l = std::lower_bound(f, tf.end(), uint64_t(e.end) << triShift);
                 const uint64_t before = out.passed;
-                kReplayView[size_t(e.func)](tf, f, l, depth, size_t(width), b.x0, b.y0, e.mask, out.fragments,
-                                            out.passed);
+                kReplayView[size_t(e.func)](&*f, &*f + (l - f), frags.layout, depth, size_t(width), b.x0, b.y0, e.mask,
+                                            out.fragments, out.passed);
                 countQuery(out, e.query, out.passed - before);
             }
         }

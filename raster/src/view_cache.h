@@ -13,7 +13,7 @@
 // records in record order, each one's pixels in the kernel's order), so the depth buffer, the
 // counts and the statistics are the same, bit for bit (test Differential.ViewCacheReplaysLaterLists).
 //
-// Memory: 10 bytes per fragment (about 2.7 MB per view of 500 x 500 for a mesh of any size, since
+// Memory: 8 bytes per fragment (about 2.1 MB per view of 500 x 500 for a mesh of any size, since
 // small triangles cover each pixel about once), within CpuBackendOptions::viewCacheBytes.
 #pragma once
 
@@ -30,16 +30,29 @@
 
 namespace cullide::raster::detail {
 
+// A fragment in 64 bits: its triangle above its incoming depth code above its place in the tile
+// (x and y in axisBits each), for a geometry, tile size and depth format whose widths fit
+// (FragLayout::of); the triangle on top keeps a tile's fragments sorted by triangle as numbers.
+struct FragLayout {
+    int axisBits = 0, zBits = 0, triBits = 0;
+    // The layout for these, or axisBits 0 when they need more than 64 bits (then no capture).
+    static FragLayout of(size_t triangles, int tileSize, const DepthFormat& format);
+    int zShift() const { return 2 * axisBits; }
+    int triShift() const { return 2 * axisBits + zBits; }
+    uint64_t pack(uint32_t tri, uint32_t z, uint32_t x, uint32_t y) const {
+        return uint64_t(tri) << triShift() | uint64_t(z) << zShift() | uint64_t(y) << axisBits | x;
+    }
+};
+
 // One tile's fragments: those of its records, in the order of its list (records in triangle
 // order, each one's fragments in its kernel's order).
 struct TileFragments {
-    std::vector<uint32_t> tri;  // per fragment: its triangle (non-decreasing)
-    std::vector<uint32_t> z;  // per fragment: its incoming depth code
-    std::vector<uint16_t> at;  // per fragment: (y - tile's y0) << 8 | (x - tile's x0)
+    std::vector<uint64_t> frag;  // FragLayout::pack
 };
 
 struct ViewFragments {
     OrthoView view;  // the key (the backend empties the cache when the geometry changes)
+    FragLayout layout;
     std::vector<TileFragments> tiles;
     // The triangles with kRejected, kClipped or kZeroArea, ascending, and those flags (RasterStats).
     std::vector<uint32_t> flagged;
@@ -47,7 +60,7 @@ struct ViewFragments {
 
     size_t bytes() const {
         size_t b = tiles.capacity() * sizeof(TileFragments) + flagged.capacity() * 4 + flags.capacity();
-        for (const TileFragments& t : tiles) b += t.tri.capacity() * 4 + t.z.capacity() * 4 + t.at.capacity() * 2;
+        for (const TileFragments& t : tiles) b += t.frag.capacity() * 8;
         return b;
     }
 };
@@ -55,9 +68,8 @@ struct ViewFragments {
 // Whether the two views give the same window coordinates, viewport and depth codes.
 bool sameView(const OrthoView& a, const OrthoView& b);
 
-// Whether `list` may be replayed from a view's fragments: no conservative draws. `tileSize`: the
-// backend's; a fragment's place in its tile takes 8 bits per axis.
-bool replayable(const CommandList& list, int tileSize);
+// Whether `list` may be replayed from a view's fragments: no conservative draws.
+bool replayable(const CommandList& list);
 
 // Whether `list`'s draws cover every one of `triangles` triangles (so a capture holds them all).
 bool drawsEverything(const CommandList& list, size_t triangles);
@@ -74,7 +86,8 @@ bool drawsEverything(const CommandList& list, size_t triangles);
 // thread's buffer). `width`, `height`: the viewport's.
 void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGrid& grid, size_t tile, int width,
                  int height, const FragCache& cache, const TileCapture& capture, const RasterTable& table,
-                 uint32_t* depth, int bits, std::vector<FragGroup>& scratch, TileFragments& out);
+                 uint32_t* depth, int bits, const FragLayout& layout, std::vector<FragGroup>& scratch,
+                 TileFragments& out);
 
 // The triangles of `plain` (`triangles` of the geometry) with kRejected, kClipped or kZeroArea,
 // into `out`.
