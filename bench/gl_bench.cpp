@@ -67,7 +67,11 @@ void BM_CpuVsGl_ReducePcs(benchmark::State& state) {
     const OrthoView view =
         fitView(mesh.positions, mesh.triangles, std::span(&range, 1), Vec3d(0, 0, 1), 500, 500, DepthFormat::unorm(24));
     const CommandList list = reducePcsList(all, uint32_t(state.range(1)));
-    auto cpu = raster::makeCpuBackend();
+    // The same list every time: the CPU sets it up and rasterizes it each time, as GL does, instead
+    // of replaying the first run's fragments (CpuBackendOptions::viewCacheBytes).
+    raster::CpuBackendOptions bo;
+    bo.viewCacheBytes = 0;
+    auto cpu = raster::makeCpuBackend(bo);
     cpu->setGeometry(mesh.positions, mesh.triangles);
     cpu->setView(view);
     gl->setGeometry(mesh.positions, mesh.triangles);

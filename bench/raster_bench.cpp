@@ -73,6 +73,7 @@ void BM_Triangles(benchmark::State& state) {
     const int W = int(state.range(1));
     raster::CpuBackendOptions o;
     o.threads = int(state.range(2));
+    o.viewCacheBytes = 0;  // the same list every iteration: set up and rasterized each time, not replayed
     // Enough triangles for a few million fragments per list.
     const size_t count = leg < 2 ? 400000 : leg < 20 ? 100000 : 1000;
     const Soup s = randomTriangles(count, leg, W, 42);
@@ -135,6 +136,7 @@ void BM_ReducePcs(benchmark::State& state) {
     const Mesh& mesh = benchMesh(int(state.range(0)));
     raster::CpuBackendOptions o;
     o.threads = int(state.range(2));
+    o.viewCacheBytes = 0;  // the same list every iteration: set up and rasterized each time, not replayed
     auto backend = raster::makeCpuBackend(o);
     backend->setGeometry(mesh.positions, mesh.triangles);
     backend->setView(fittedView(mesh, 500, 500));

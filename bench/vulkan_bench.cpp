@@ -90,7 +90,11 @@ void BM_CpuVsVulkan_ReducePcs(benchmark::State& state) {
     const OrthoView view =
         fitView(mesh.positions, mesh.triangles, std::span(&range, 1), Vec3d(0, 0, 1), 500, 500, DepthFormat::unorm(24));
     const CommandList list = reducePcsList(all, uint32_t(state.range(1)));
-    auto cpu = raster::makeCpuBackend();
+    // The same list every time: the CPU sets it up and rasterizes it each time, as the GPUs do,
+    // instead of replaying the first run's fragments (CpuBackendOptions::viewCacheBytes).
+    raster::CpuBackendOptions bo;
+    bo.viewCacheBytes = 0;
+    auto cpu = raster::makeCpuBackend(bo);
     std::vector<DepthBackend*> backends{cpu.get(), vk};
     if (gl) backends.push_back(gl);
     for (DepthBackend* b : backends) {
