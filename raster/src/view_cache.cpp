@@ -55,10 +55,6 @@ TileBounds boundsOf(const TileGrid& grid, size_t tile, int width, int height) {
     return {x0, y0, std::min(x0 + ts, width) - 1, std::min(y0 + ts, height) - 1};
 }
 
-}  // namespace
-
-namespace {
-
 // The fragments of groups [g, e) of a record of triangle t, appended to `out` (tile from (x0, y0)).
 void appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t width, uint32_t x0, uint32_t y0,
                   const FragLayout& layout, TileFragments& out) {
@@ -220,7 +216,8 @@ void runFromView(const CommandList& list, const ViewFragments& frags, const Tile
                 const auto f = std::lower_bound(tf.begin(), tf.end(), uint64_t(e.first) << triShift);
                 const auto l = std::lower_bound(f, tf.end(), uint64_t(e.end) << triShift);
                 const uint64_t before = out.passed;
-                kReplayView[size_t(e.func)](&*f, &*f + (l - f), frags.layout, depth, size_t(width), b.x0, b.y0, e.mask,
+                const uint64_t* const run = tf.data() + (f - tf.begin());
+                kReplayView[size_t(e.func)](run, run + (l - f), frags.layout, depth, size_t(width), b.x0, b.y0, e.mask,
                                             out.fragments, out.passed);
                 countQuery(out, e.query, out.passed - before);
             }
