@@ -6,8 +6,8 @@
 // (core/src/cullide.cpp, wholeFit), so levels 1 and 2 of a 270k bunny set up and rasterize again,
 // in 12 of its 18 such lists, what level 0 did in the same view. A triangle's fragments and their
 // incoming depths depend only on the triangle, the view and the rasterization options, never on
-// the list or the GL state. So a list that draws every triangle runs as usual and then its
-// fragments are captured, per tile and in record order; a later list under the same view (any
+// the list or the GL state. So a list that draws every triangle runs as usual and its fragments
+// are captured, per tile and in record order; a later list under the same view (any
 // draws, any state, no conservative draws) replays them instead of setting up and rasterizing.
 // Within a draw and a tile, the normal path meets the same fragments in the same order (its
 // records in record order, each one's pixels in the kernel's order), so the depth buffer, the
@@ -32,7 +32,8 @@ namespace cullide::raster::detail {
 
 // A fragment in 64 bits: its triangle above its incoming depth code above its place in the tile
 // (x and y in axisBits each), for a geometry, tile size and depth format whose widths fit
-// (FragLayout::of); the triangle on top keeps a tile's fragments sorted by triangle as numbers.
+// (FragLayout::of). With the triangle on top, a tile's fragments (in triangle order) are below
+// t << triShift exactly for the triangles below t, so binary searches find a draw's run.
 struct FragLayout {
     int axisBits = 0, zBits = 0, triBits = 0;
     // The layout for these, or axisBits 0 when they need more than 64 bits (then no capture).
