@@ -14,9 +14,9 @@
 // pages inside the array are advised, so its memory use stays the same. An array with pages of its
 // own (below) maps and advises whole 2 MiB pages to its end: the last one may hold up to 2 MiB
 // that the array does not use, but its tail is no longer hundreds of 4 KiB faults (a 1M
-// hierarchy build's arrays of 3.8 and 11.4 MiB had 1.8 and 1.4 MiB in 4 KiB pages each: 2,600
-// faults; with whole huge pages its BM_Hierarchy time fell from 160-183 to 137-146 ms, and the 1M
-// prune's peak memory rose by 0.3 MB).
+// hierarchy build's two arrays of 3.8 and two of 11.4 MiB had 1.8 and 1.4 MiB in 4 KiB pages
+// each: about 1,700 faults; with whole huge pages its BM_Hierarchy time fell from 160-183 to
+// 137-146 ms, and the 1M prune's peak memory rose by 0.3 MB).
 //
 // An array may also map its own pages from 256 KiB on (kOwnPages), which go back to the system
 // when it is freed, whatever malloc's heuristics: an array of a few MiB freed from malloc's heap
