@@ -423,7 +423,7 @@ private:
         makeEvents(list, walk);
         const detail::FragLayout layout = detail::FragLayout::of(triangles_.size(), options_.tileSize, view_.depth);
         const bool capture = !viewsFull_ && options_.viewCacheBytes > 0 && layout.axisBits > 0 &&
-            detail::replayable(list) && detail::drawsEverything(list, triangles_.size());
+            detail::replayable(list) && detail::drawsEverything(plain_, triangles_.size());
         detail::ViewFragments v;
         if (capture) {
             v.view = view_;

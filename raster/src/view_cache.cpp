@@ -30,15 +30,11 @@ FragLayout FragLayout::of(size_t triangles, int tileSize, const DepthFormat& for
     return l;
 }
 
-bool drawsEverything(const CommandList& list, size_t triangles) {
-    std::vector<std::array<uint64_t, 2>> ranges;
-    for (const Command& c : list.commands())
-        if (c.op == Command::Op::Draw && c.count > 0) ranges.push_back({c.first, uint64_t(c.first) + c.count});
-    std::sort(ranges.begin(), ranges.end());
+bool drawsEverything(const RecordSet<EdgeTri>& plain, size_t triangles) {
     uint64_t covered = 0;  // [0, covered) is drawn
-    for (const auto& r : ranges) {
-        if (r[0] > covered) return false;
-        covered = std::max(covered, r[1]);
+    for (const auto& c : plain.chunks) {
+        if (c[0] != covered) return false;
+        covered = c[1];
     }
     return triangles > 0 && covered == triangles;
 }

@@ -72,8 +72,9 @@ bool sameView(const OrthoView& a, const OrthoView& b);
 // Whether `list` may be replayed from a view's fragments: no conservative draws.
 bool replayable(const CommandList& list);
 
-// Whether `list`'s draws cover every one of `triangles` triangles (so a capture holds them all).
-bool drawsEverything(const CommandList& list, size_t triangles);
+// Whether the drawn triangles, as setup's chunks of `plain` (their union, cut in order), are all
+// `triangles` of the geometry (so a capture holds them all).
+bool drawsEverything(const RecordSet<EdgeTri>& plain, size_t triangles);
 
 // A capture, for a list that draws every triangle: the list runs as usual, each tile noting
 // in a TileCapture the groups that runTile recorded for its records (Cullide's lists draw each
