@@ -1,10 +1,12 @@
 // Benchmarks of the CPU reference rasterizer (raster/).
 //
-//   BM_Triangles/<leg px>/<viewport>/<threads>: throughput of random right triangles with legs of
-//     `leg` pixels (bounding box leg x leg, area leg^2/2; leg 1.5 ~ a 1-pixel triangle), one
-//     command list: clear, LESS, draw all. Counters: Mtri/s and Mfrag/s (covered centres); on
-//     leg 1, 500 px, 1 thread (issue 16's row) x_90b80f8 (rate over commit 90b80f8's) and the
-//     goal of 30 M triangles/s.
+//   BM_Triangles/<leg px>/<viewport>/<threads>/<direct>: throughput of random right triangles with
+//     legs of `leg` pixels (bounding box leg x leg, area leg^2/2; leg 1.5 ~ a 1-pixel triangle),
+//     one command list: clear, LESS, draw all. One thread takes the direct path (direct:1,
+//     CpuBackendOptions::direct) unless told not to (direct:0, the tiles); two threads always
+//     tile. Counters: Mtri/s and Mfrag/s (covered centres); on leg 1, 500 px, 1 thread (issue
+//     16's row) x_90b80f8 (rate over commit 90b80f8's), x_tiles (rate over the tiles on one
+//     thread, timed in this run just before) and the goal of 30 M triangles/s.
 //   BM_ReducePcs/<mesh>/<triangles per object>/<threads>: one self-variant reducePCS (the seed
 //     paper's Figure 3) in one view direction (+z), as ONE command list: forward pass
 //     (clear; per object: mask on, LESS, draw; mask off, GREATER, query, draw) and reverse pass
@@ -68,11 +70,15 @@ OrthoView windowView(int W) {
 // that commit, measured another way; the figure here is the one this benchmark gave.
 constexpr double kSmallTrianglesMtris90b80f8 = 2.3;
 
+// The last rate of BM_Triangles/leg:1/W:500/threads:1/direct:0 in this run (M triangles/s).
+double smallTrianglesTilesMtris = 0;
+
 void BM_Triangles(benchmark::State& state) {
     const double leg = state.range(0) == 1 ? 1.5 : double(state.range(0));
     const int W = int(state.range(1));
     raster::CpuBackendOptions o;
     o.threads = int(state.range(2));
+    o.direct = state.range(3) != 0;
     o.viewCacheBytes = 0;  // the same list every iteration: set up and rasterized each time, not replayed
     // Enough triangles for a few million fragments per list.
     const size_t count = leg < 2 ? 400000 : leg < 20 ? 100000 : 1000;
@@ -88,19 +94,24 @@ void BM_Triangles(benchmark::State& state) {
     for (auto _ : state) benchmark::DoNotOptimize(backend->execute(list));
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / double(state.iterations());
+    if (backend->lastRanDirect() != (o.direct && o.threads == 1)) state.SkipWithError("not the path asked for");
     state.counters["Mtri/s"] = benchmark::Counter(double(count) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
     state.counters["Mfrag/s"] =
         benchmark::Counter(double(backend->lastStats().fragments) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
     // Issue 16's row "~1 px triangles": commit 90b80f8's rate on leg 1, W 500, 1 thread, and the
     // goal (Masked Occlusion Culling does 20 M tris/s per thread at 10x10 px; ours is depth-exact).
     if (state.range(0) == 1 && W == 500 && o.threads == 1) {
-        state.counters["x_90b80f8"] = double(count) / 1e6 / seconds / kSmallTrianglesMtris90b80f8;
+        const double rate = double(count) / 1e6 / seconds;
+        if (!o.direct) smallTrianglesTilesMtris = rate;
+        else if (smallTrianglesTilesMtris > 0) state.counters["x_tiles"] = rate / smallTrianglesTilesMtris;
+        state.counters["x_90b80f8"] = rate / kSmallTrianglesMtris90b80f8;
         state.counters["goal_Mtri/s"] = 30;
     }
 }
 BENCHMARK(BM_Triangles)
-    ->ArgNames({"leg", "W", "threads"})
-    ->ArgsProduct({{1, 10, 100}, {500, 1024}, {1, 2}})
+    ->ArgNames({"leg", "W", "threads", "direct"})
+    ->Args({1, 500, 1, 0})  // first: the tiles on one thread, for x_tiles
+    ->ArgsProduct({{1, 10, 100}, {500, 1024}, {1, 2}, {1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -1166,6 +1166,93 @@ TEST(Differential, ThreadCountInvariance) {
     }
 }
 
+// Trap: the direct path (one thread, each range drawn once: raster/src/direct_path.h) sets up a
+// block of triangles at a time and rasterizes them over the whole viewport in order. A record
+// taken from the wrong lane of a batch, a clipped triangle's sub-triangles out of order or
+// dropped, a block boundary (128 triangles) splitting a draw, statistics of rejected, clipped or
+// edge-on triangles counted apart from the tiles', or the state of the draw taken wrongly would
+// differ from the scalar path and from the tiles on the same thread. Random scenes with draws of
+// up to a few hundred triangles, every format, both fill rules, with and without AVX2; then a
+// list that draws a range twice must take the tiles (it replays there).
+TEST(Differential, DirectPathEqualsScalarReferenceAndTiles) {
+    const DepthFormat formats[] = {DepthFormat::unorm(8),  DepthFormat::unorm(16), DepthFormat::unorm(24),
+                                   DepthFormat::unorm(31), DepthFormat::unorm(32), DepthFormat::float32()};
+    for (uint64_t seed = 300; seed < (CULLIDE_SANITIZED ? 306u : 318u); ++seed) {
+        std::mt19937_64 pick(seed * 31);
+        const int W = 1 + int(pick() % 90), H = 1 + int(pick() % 90);
+        RandomScene s = randomScene(seed, W, H, 700, 0, 150.0);
+        // Disjoint draws of 0-300 triangles in a shuffled order, with state changes and queries.
+        std::vector<std::pair<uint32_t, uint32_t>> ranges;
+        for (uint32_t first = 0; first < 700;) {
+            const uint32_t count = std::min<uint32_t>(700 - first, uint32_t(pick() % 301));
+            ranges.emplace_back(first, count);
+            first += std::max<uint32_t>(count, 1);
+        }
+        std::shuffle(ranges.begin(), ranges.end(), pick);
+        const DepthFunc funcs[] = {DepthFunc::Never,   DepthFunc::Less,     DepthFunc::Equal,  DepthFunc::LEqual,
+                                   DepthFunc::Greater, DepthFunc::NotEqual, DepthFunc::GEqual, DepthFunc::Always};
+        s.list.clear(0.9);
+        for (size_t k = 0; k < ranges.size(); ++k) {
+            s.list.depthFunc(k % 3 == 0 ? funcs[pick() % 8] : DepthFunc::Less);
+            s.list.depthMask(pick() % 4 != 0);
+            if (pick() % 9 == 0) s.list.clear(0.7);
+            const bool query = pick() % 2 == 0;
+            if (query) s.list.beginQuery(pick() % 4 == 0 ? QueryKind::AnySamplesPassed : QueryKind::SamplesPassed);
+            s.list.draw(ranges[k].first, ranges[k].second);
+            if (query) s.list.endQuery();
+        }
+        const OrthoView view = windowView(W, H, formats[seed % 6]);
+        CpuBackendOptions ref;
+        ref.scalarReference = true;
+        ref.fillRule = seed % 2 ? FillRule::BottomLeft : FillRule::TopLeft;
+        ref.subpixelBits = seed % 3 == 0 ? 4 : 8;
+        const Outcome expected = run(s, view, ref, 2);
+        EXPECT_GT(expected.stats.fragments, 0u);
+        EXPECT_GT(expected.stats.clipped, 0u);
+        for (bool simd : {true, false}) {
+            CpuBackendOptions o = ref;
+            o.scalarReference = false;
+            o.threads = 1;
+            o.simd = simd;
+            const std::string what = "seed " + std::to_string(seed) + (simd ? " simd " : " scalar ") + view.depth.name();
+            auto direct = backendFor(s.geo, view, o);
+            for (int i = 0; i < 2; ++i) {  // the second list starts from the first's state, as run() does
+                Outcome got;
+                got.results = direct->execute(s.list);
+                got.stats = direct->lastStats();
+                EXPECT_TRUE(direct->lastRanDirect()) << what;
+                if (i == 1) {
+                    got.depth = direct->readDepth();
+                    expectSame(expected, got, what + " direct");
+                }
+            }
+            o.direct = false;
+            const Outcome tiles = run(s, view, o, 2);
+            expectSame(expected, tiles, what + " tiles");
+        }
+    }
+    // A range drawn twice: the tiles, also on one thread; two threads never go direct.
+    const RandomScene s = randomScene(9, 40, 30, 50, 0);
+    CommandList twice;
+    twice.clear();
+    twice.draw(3, 20);
+    twice.depthFunc(DepthFunc::Equal);
+    twice.draw(3, 20);
+    CpuBackendOptions o;
+    o.threads = 1;
+    auto one = backendFor(s.geo, windowView(40, 30), o);
+    one->execute(twice);
+    EXPECT_FALSE(one->lastRanDirect());
+    CommandList once;
+    once.draw(3, 20);
+    one->execute(once);
+    EXPECT_TRUE(one->lastRanDirect());
+    o.threads = 2;
+    auto two = backendFor(s.geo, windowView(40, 30), o);
+    two->execute(once);
+    EXPECT_FALSE(two->lastRanDirect());
+}
+
 // Trap: setup writes each chunk of 1024 triangles into a slot of one record per triangle; a chunk
 // of triangles clipped into several sub-triangles outgrows its slot, spills, and every slot moves
 // (records.cpp). A wrong shift of the record ranges, a spilled chunk's records lost, or a spill

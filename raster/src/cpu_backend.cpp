@@ -34,6 +34,7 @@
 
 #include "binning.h"
 #include "conservative.h"
+#include "direct_path.h"
 #include "frag_cache.h"
 #include "records.h"
 #include "reference_path.h"
@@ -166,6 +167,7 @@ public:
     const CpuBackendOptions& options() const override { return options_; }
     const RasterStats& lastStats() const override { return stats_; }
     bool lastReplayedView() const override { return replayedView_; }
+    bool lastRanDirect() const override { return directRan_; }
     bool supportsConservative() const override { return true; }
 
     IntervalImage readIntervals() override {
@@ -284,7 +286,7 @@ public:
             depthPending_ = false;
         }
         stats_ = RasterStats{};
-        replayedView_ = false;
+        replayedView_ = directRan_ = false;
         std::vector<uint64_t> results;
         inArena([&] {
             if (!options_.scalarReference)
@@ -418,6 +420,15 @@ private:
     // Steps 3-7 (step 1 is execute's, step 2 updateWindow's); a list that draws every triangle
     // also captures its fragments for later lists under this view (view_cache.h).
     std::vector<uint64_t> executeFast(const CommandList& list) {
+        // One thread: a list that draws each range once goes straight through (direct_path.h),
+        // not captured (a capture of such a list rasterizes every tile again: view_cache.h).
+        directRan_ = options_.direct && arena_.max_concurrency() == 1 && detail::directEligible(list);
+        if (directRan_) {
+            const detail::RasterTable table =
+                detail::pickRasterTable(view_.depth.kind == DepthFormat::Kind::Float32, options_.simd);
+            const detail::SetupInput in{triangles_, window_, snapped_, params_, grid_, options_.simd};
+            return detail::executeDirect(list, in, table, view_.depth, state_, depth_.data(), stats_);
+        }
         detail::StateWalker walk(state_, list.queryCount());
         setupRecords(list);
         makeEvents(list, walk);
@@ -542,6 +553,7 @@ private:
     size_t viewBytes_ = 0;
     bool viewsFull_ = false;
     bool replayedView_ = false;  // by the last execute()
+    bool directRan_ = false;  // the last execute() took the direct path
     // window_ and snapped_ hold the current view's numbers for every vertex (windowAll_), or for
     // those whose stamp is stamp_; windowValid_: sized, stamp_ this view's.
     bool windowValid_ = false, windowAll_ = false;

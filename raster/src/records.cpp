@@ -229,15 +229,10 @@ struct SubTriangles {
 };
 struct NoScratch {};
 
-// setupDrawn's count pass keeps its verdict in a triangle's flags (see there). kHintCw goes with
-// kHintOne: the snapped triangle is clockwise.
-enum : uint8_t { kHintCw = 0x20, kHintOne = 0x40, kHintClip = 0x80 };
-static_assert(((kRejected | kClipped | kZeroArea) & (kHintCw | kHintOne | kHintClip)) == 0);
-
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 
 // The count pass on the eight triangles tris[0..8) at once with AVX2: writes their hints to
-// hint[0..8) and returns their records, as setupDrawn's countOne does one by one (integers only:
+// hint[0..8) and returns their records, as countHints does one by one (integers only:
 // the same verdicts). A SnapVertex is three 32-bit words (x, y, then inside and beyond in the low
 // bytes of the third), loaded one by one into the lanes: AVX2's gathers were slower here (an AMD
 // EPYC; an A/B of BM_Prune, bunny 270k, one thread: 536, 532 -> 508, 504 ms without them, and
@@ -315,41 +310,38 @@ uint32_t countHints8(const Triangle*, const SnapVertex*, const SetupParams&, uin
 
 }  // namespace
 
+uint32_t countHints(std::span<const Triangle> triangles, const SnapVertex* snapped, const SetupParams& params,
+                    bool batched, uint32_t lo, uint32_t hi, uint8_t* hint) {
+    auto countOne = [&](uint32_t t) -> uint32_t {
+        uint8_t& h = hint[t - lo];
+        const Triangle& tri = triangles[t];
+        const SnapVertex &s0 = snapped[tri[0]], &s1 = snapped[tri[1]], &s2 = snapped[tri[2]];
+        if (!(s0.inside && s1.inside && s2.inside)) return h = kHintClip, 1;
+        const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
+        const int64_t area2 = snappedArea2(sx, sy);
+        const bool area = area2 != 0;
+        if (area && boxHoldsCentre(sx, sy, params)) return h = uint8_t(kHintOne | (area2 < 0 ? kHintCw : 0)), 1;
+        h = (s0.beyond & s1.beyond & s2.beyond) != 0 ? kRejected : area ? 0 : kZeroArea;
+        return 0;
+    };
+    // Eight at a time where the CPU allows: the same hints and counts.
+    uint32_t n = 0, t = lo;
+    if (batched)
+        for (; t + 8 <= hi; t += 8) n += countHints8(&triangles[t], snapped, params, hint + (t - lo));
+    for (; t < hi; ++t) n += countOne(t);
+    return n;
+}
+
 void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri>& out) {
     drawnChunks(list, Command::Op::Draw, out);
     SetupParams params = in.params;
     params.dropEmpty = true;
-    // The guess: what setupTriangle gives a triangle whose vertices need no clipping (0 or 1
-    // record), 1 for the others (clipped ones with more spill). For vertices inside the clip
-    // volume trivialReject adds nothing: they are finite with depths in [0, 1], and three beyond
-    // one side of the viewport snap to a box that holds no centre; so the count reads the snapped
-    // vertices only, not the window ones (it was ~10% of a prune's time as a second gather).
-    // The count is exact for such a triangle, so what it found is kept for the setup (in the
-    // triangle's flags, which the setup then overwrites): kHintOne, one record, whose box is known
-    // to hold a centre; kHintClip, the clipping path; otherwise no record, and the flags are
-    // already the triangle's own (rejected, or zero area, or neither: no centre in its box), from
-    // the snapped vertices alone (setupTriangle's verdict: trivialReject by the vertices' sides).
+    // The count sizes each chunk's slot, and what it found is kept for the setup in the
+    // triangles' flags (countHints), which the setup then overwrites.
     std::vector<uint8_t>& hint = out.flags;  // sized by buildRecords before it counts
-    auto countOne = [&](uint32_t t) -> uint32_t {
-        const Triangle& tri = in.triangles[t];
-        const SnapVertex &s0 = in.snapped[tri[0]], &s1 = in.snapped[tri[1]], &s2 = in.snapped[tri[2]];
-        if (!(s0.inside && s1.inside && s2.inside)) return hint[t] = kHintClip, 1;
-        const int64_t sx[3] = {s0.x, s1.x, s2.x}, sy[3] = {s0.y, s1.y, s2.y};
-        const int64_t area2 = snappedArea2(sx, sy);
-        const bool area = area2 != 0;
-        if (area && boxHoldsCentre(sx, sy, params)) return hint[t] = uint8_t(kHintOne | (area2 < 0 ? kHintCw : 0)), 1;
-        hint[t] = (s0.beyond & s1.beyond & s2.beyond) != 0 ? kRejected : area ? 0 : kZeroArea;
-        return 0;
-    };
-    // Eight at a time where the CPU allows: the same hints and counts.
     const bool batched = in.simd && haveSetupAvx2();
     auto countRange = [&](uint32_t lo, uint32_t hi) -> size_t {
-        size_t n = 0;
-        uint32_t t = lo;
-        if (batched)
-            for (; t + 8 <= hi; t += 8) n += countHints8(&in.triangles[t], in.snapped.data(), params, &hint[t]);
-        for (; t < hi; ++t) n += countOne(t);
-        return n;
+        return countHints(in.triangles, in.snapped.data(), params, batched, lo, hi, &hint[lo]);
     };
     // One-record triangles are set up four at a time where the CPU allows (the records are the
     // same either way): each reserves its record, and a full batch fills all four.

@@ -64,6 +64,22 @@ struct SetupInput {
     bool simd = true;  // set up four triangles at a time with AVX2 where the CPU has it
 };
 
+// The count pass of setup, on triangles [lo, hi): a cheap guess of their records, exact for a
+// triangle whose vertices need no clipping. setupTriangle gives such a triangle 0 or 1 record;
+// the others count 1 (clipped ones with more spill). For vertices inside the clip volume
+// trivialReject adds nothing: they are finite with depths in [0, 1], and three beyond one side of
+// the viewport snap to a box that holds no centre; so the count reads the snapped vertices only,
+// not the window ones (it was ~10% of a prune's time as a second gather). Its verdict goes to
+// hint[t - lo]: kHintOne, one record, whose box is known to hold a centre (with kHintCw: the
+// snapped triangle is clockwise); kHintClip, the clipping path; otherwise no record, and the
+// hint is already the triangle's TriFlags (rejected, or zero area, or neither: no centre in its
+// box), from the snapped vertices alone (setupTriangle's verdict: trivialReject by the vertices'
+// sides). `batched`: eight at a time with AVX2 (haveSetupAvx2()), the same hints and counts.
+enum : uint8_t { kHintCw = 0x20, kHintOne = 0x40, kHintClip = 0x80 };
+static_assert(((kRejected | kClipped | kZeroArea) & (kHintCw | kHintOne | kHintClip)) == 0);
+uint32_t countHints(std::span<const Triangle> triangles, const SnapVertex* snapped, const SetupParams& params,
+                    bool batched, uint32_t lo, uint32_t hi, uint8_t* hint);
+
 // Sets up the union of the ranges drawn by `list`'s Draw commands, once per triangle (clip, snap,
 // edge functions, depth plane, pixel bounding box), and bins the records to tiles.
 void setupDrawn(const CommandList& list, const SetupInput& in, RecordSet<EdgeTri>& out);

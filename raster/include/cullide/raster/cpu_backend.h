@@ -12,7 +12,9 @@
 //     task that walks, in command order, only the clears and draws touching it, and within a draw
 //     only its triangles binned to the tile (found by binary search in the tile's sorted list).
 //     Per-tile query counts are kept as sparse (query, count) lists and summed at the end.
-//     Nothing depends on scheduling, so results are identical for any thread count.
+//     Nothing depends on scheduling, so results are identical for any thread count. On one
+//     thread, a list that draws each range once skips the tiles (`direct`): each triangle is set
+//     up and rasterized over the whole viewport as it comes, with the same setup and pixel loops.
 //   - scalar reference (`scalarReference = true`): one thread, commands in order, each triangle
 //     tested at every pixel centre of the viewport with edge functions evaluated from scratch.
 //     Slow (O(pixels) per triangle) and obviously correct; used by the differential tests.
@@ -39,8 +41,12 @@ struct CpuBackendOptions {
     bool scalarReference = false;  // use the scalar reference path instead
     bool simd = true;  // fast path: AVX2 pixel loop and triangle setup where the CPU has it
                        // (the same results bit for bit; false: scalar)
+    // Fast path on one thread: run a list that draws each range once straight through, each
+    // triangle set up and rasterized over the whole viewport in command order, without records,
+    // bins or tiles (the same results bit for bit; raster/src/direct_path.h). false: always tiles.
+    bool direct = true;
     // Fast path: memory for the fragments of the whole geometry under the views of lists that drew
-    // every triangle (10 bytes per fragment, ~2.7 MB per 500 x 500 view), so that later lists
+    // every triangle (8 bytes per fragment, ~2.1 MB per 500 x 500 view), so that later lists
     // under one of those views replay them instead of setting up and rasterizing (Cullide's first
     // levels; the same results bit for bit; raster/src/view_cache.h). 0: none kept. Emptied when
     // the geometry changes.
@@ -86,6 +92,8 @@ public:
     // Whether the most recent execute() replayed the fragments captured under its view
     // (CpuBackendOptions::viewCacheBytes) instead of setting up its triangles.
     virtual bool lastReplayedView() const = 0;
+    // Whether the most recent execute() took the direct path (CpuBackendOptions::direct).
+    virtual bool lastRanDirect() const = 0;
     // Frees the scratch kept across lists (triangle records, bins, events, fragment caches, window
     // coordinates), keeping geometry, view and buffers; the next execute() allocates it again.
     // For a caller that runs something else large between lists (trace recording).
