@@ -10,6 +10,10 @@
 #include <cmath>
 #include <cstdint>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace cullide::oracle {
 namespace detail {
 namespace {
@@ -85,6 +89,36 @@ inline int exactSide(const Prim& a, const Plane& pa, const Prim& b, int k) {
     return d != 0 ? d : exactSideSlow(a, b, k);
 }
 
+// exactSide of b's corners j and k: planeSide's filter on both at once in the two lanes of an
+// SSE2 vector (x86-64's baseline), lane by lane the same operations in the same order, so the
+// same signs; exactSideSlow for a lane the filter cannot tell. Most pairs are decided by two
+// such signs (a neighbour's two other corners against a triangle's plane).
+inline void exactSides2(const Prim& a, const Plane& pa, const Prim& b, int j, int k, int& sj, int& sk) {
+#if defined(__SSE2__)
+    const auto pair = [&](int c) { return _mm_set_pd(double(b.p[k][c]), double(b.p[j][c])); };
+    const __m128d wx = _mm_sub_pd(pair(0), _mm_set1_pd(double(a.p[0][0])));
+    const __m128d wy = _mm_sub_pd(pair(1), _mm_set1_pd(double(a.p[0][1])));
+    const __m128d wz = _mm_sub_pd(pair(2), _mm_set1_pd(double(a.p[0][2])));
+    const __m128d det = _mm_add_pd(_mm_add_pd(_mm_mul_pd(wx, _mm_set1_pd(pa.n[0])), _mm_mul_pd(wy, _mm_set1_pd(pa.n[1]))),
+                                   _mm_mul_pd(wz, _mm_set1_pd(pa.n[2])));
+    const __m128d sign = _mm_set1_pd(-0.0);
+    const __m128d permanent =
+        _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_andnot_pd(sign, wx), _mm_set1_pd(pa.perm[0])),
+                              _mm_mul_pd(_mm_andnot_pd(sign, wy), _mm_set1_pd(pa.perm[1]))),
+                   _mm_mul_pd(_mm_andnot_pd(sign, wz), _mm_set1_pd(pa.perm[2])));
+    const __m128d bound = _mm_mul_pd(_mm_set1_pd(kOrient3dErrBound), permanent);
+    const int above = _mm_movemask_pd(_mm_cmpgt_pd(det, bound));
+    const int below = _mm_movemask_pd(_mm_cmpgt_pd(_mm_xor_pd(det, sign), bound));
+    sj = (above & 1) - (below & 1);
+    sk = (above >> 1) - (below >> 1);
+#else
+    sj = planeSide(a, pa, b.p[j][0], b.p[j][1], b.p[j][2]);
+    sk = planeSide(a, pa, b.p[k][0], b.p[k][1], b.p[k][2]);
+#endif
+    if (sj == 0) sj = exactSideSlow(a, b, j);
+    if (sk == 0) sk = exactSideSlow(a, b, k);
+}
+
 }  // namespace
 
 Plane planeOf(const Prim& prim) {
@@ -130,10 +164,11 @@ Contact primContact(const Prim& a, const Plane& planeA, const Prim& b, const Pla
         // with the roles swapped). Exact signs: nearly coplanar neighbours (subdivided flat
         // faces, rounded midpoints) are decided here too, not in faceContact.
         const int b1 = (sb[0] + 1) % 3, b2 = (sb[0] + 2) % 3, a1 = (sa[0] + 1) % 3, a2 = (sa[0] + 2) % 3;
-        const int s1 = exactSide(a, planeA, b, b1), s2 = exactSide(a, planeA, b, b2);
+        int s1, s2, t1, t2;
+        exactSides2(a, planeA, b, b1, b2, s1, s2);
         if (s1 == s2 && s1 != 0) return Contact::None;
         const Plane planeB = storedB ? *storedB : planeOf(b);
-        const int t1 = exactSide(b, planeB, a, a1), t2 = exactSide(b, planeB, a, a2);
+        exactSides2(b, planeB, a, a1, a2, t1, t2);
         if (t1 == t2 && t1 != 0) return Contact::None;
         // Coplanar (b's other corners exactly on a's plane, hence all six points): they meet
         // besides the shared vertex v iff their closed wedges at v share more than v, i.e. a
@@ -163,10 +198,12 @@ Contact primContact(const Prim& a, const Plane& planeA, const Prim& b, const Pla
         // All of b's corners strictly on one side of a's plane, or all of a's of b's: apart.
         // Exact signs, then Guigue-Devillers on them (triangleContact without recomputing).
         int db[3], da[3];
-        for (int k = 0; k < 3; ++k) db[k] = exactSide(a, planeA, b, k);
+        exactSides2(a, planeA, b, 0, 1, db[0], db[1]);
+        db[2] = exactSide(a, planeA, b, 2);
         if (db[0] == db[1] && db[1] == db[2] && db[0] != 0) return Contact::None;
         const Plane planeB = storedB ? *storedB : planeOf(b);
-        for (int k = 0; k < 3; ++k) da[k] = exactSide(b, planeB, a, k);
+        exactSides2(b, planeB, a, 0, 1, da[0], da[1]);
+        da[2] = exactSide(b, planeB, a, 2);
         if (da[0] == da[1] && da[1] == da[2] && da[0] != 0) return Contact::None;
         const TrianglePoints pa{corner(a, 0), corner(a, 1), corner(a, 2)}, pb{corner(b, 0), corner(b, 1), corner(b, 2)};
         return triangleContactFromSigns(pa, pb, da, db);
