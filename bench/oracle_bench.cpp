@@ -16,12 +16,15 @@
 //     same mesh over ours (from CGAL's run in this process, which is registered first; timed
 //     here, best of 5, when a filter left it out). Reference figures: CGAL about 106 ms
 //     (bunny75k), 3.1 s (two cows); target: ours at least 4x faster with identical pairs.
-//   BM_OracleInterleaved/<mesh>: meshes 3-7, one thread, one call of ours then one of CGAL
-//     sequential per iteration (40), so that both are timed in the same minutes of a machine
-//     whose speed drifts (BM_Oracle's vs_cgal divides two runs taken a second apart, and moves
-//     with it). Each call starts with caches the other call left, as a user's single call does.
+//   BM_OracleInterleaved/<mesh>/<workspace>: meshes 3-7, one thread, one call of ours then one
+//     of CGAL sequential per iteration (40), so that both are timed in the same minutes of a
+//     machine whose speed drifts (BM_Oracle's vs_cgal divides two runs taken a second apart, and
+//     moves with it). Each call starts with caches the other call left, as a user's single call
+//     does, and with whatever memory malloc kept: workspace 1 passes one oracle::Workspace to
+//     every call of ours, as a caller that runs the oracle per frame does; 0, none.
 //     Counters: ours_ms, cgal_ms (the fastest call of each), vs_cgal_best (their ratio),
-//     vs_cgal_median (the median of the per-iteration ratios).
+//     vs_cgal_median (the median of the per-iteration ratios); ours' phases as in BM_Oracle
+//     (means).
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
 #include "cullide/oracle/cgal_reference.h"
@@ -38,6 +41,7 @@
 #include <map>
 #include <memory>
 #include <numbers>
+#include <vector>
 
 namespace {
 
@@ -194,32 +198,40 @@ BENCHMARK(BM_Oracle)
 // Ours against CGAL sequential, interleaved (see the top of this file).
 void BM_OracleInterleaved(benchmark::State& state) {
     const int which = int(state.range(0));
+    oracle::Workspace workspace;  // used with workspace:1 (oracle::Workspace)
+    oracle::Workspace* const reuse = state.range(1) != 0 ? &workspace : nullptr;
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
     const Mesh& mesh = benchMesh(which);
     const Scene scene = sceneOf(mesh);
     const oracle::CgalSelfIntersections cgal(mesh, "bench mesh");
     std::vector<double> ours, theirs, ratio;
+    double phase[3] = {0, 0, 0};
     for (auto _ : state) {
         const auto t0 = std::chrono::steady_clock::now();
-        const oracle::Truth t = oracle::findIntersections(scene);
+        const oracle::Truth t = oracle::findIntersections(scene, {}, reuse);
         benchmark::DoNotOptimize(t.pairs.data());
         const auto t1 = std::chrono::steady_clock::now();
         const auto p = cgal.run(false);
         benchmark::DoNotOptimize(p.data());
         const auto t2 = std::chrono::steady_clock::now();
+        phase[0] += t.setupSeconds, phase[1] += t.buildSeconds, phase[2] += t.collideSeconds;
         ours.push_back(std::chrono::duration<double>(t1 - t0).count());
         theirs.push_back(std::chrono::duration<double>(t2 - t1).count());
         ratio.push_back(theirs.back() / ours.back());
     }
     std::sort(ratio.begin(), ratio.end());
+    const double perCall = 1e3 / double(ours.size());  // ms
+    state.counters["setup_ms"] = phase[0] * perCall;
+    state.counters["build_ms"] = phase[1] * perCall;
+    state.counters["collide_ms"] = phase[2] * perCall;
     state.counters["ours_ms"] = *std::min_element(ours.begin(), ours.end()) * 1e3;
     state.counters["cgal_ms"] = *std::min_element(theirs.begin(), theirs.end()) * 1e3;
     state.counters["vs_cgal_best"] = state.counters["cgal_ms"] / state.counters["ours_ms"];
     state.counters["vs_cgal_median"] = ratio[ratio.size() / 2];
 }
 BENCHMARK(BM_OracleInterleaved)
-    ->ArgName("mesh")
-    ->DenseRange(3, 7)
+    ->ArgNames({"mesh", "workspace"})
+    ->ArgsProduct({{3, 4, 5, 6, 7}, {0, 1}})
     ->Iterations(40)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();

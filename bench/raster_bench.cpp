@@ -110,8 +110,8 @@ void BM_Triangles(benchmark::State& state) {
 }
 BENCHMARK(BM_Triangles)
     ->ArgNames({"leg", "W", "threads", "direct"})
-    ->Args({1, 500, 1, 0})  // first: the tiles on one thread, for x_tiles
-    ->ArgsProduct({{1, 10, 100}, {500, 1024}, {1, 2}, {1}})
+    ->ArgsProduct({{1, 10, 100}, {500, 1024}, {1}, {0, 1}})  // the tiles first, for x_tiles
+    ->ArgsProduct({{1, 10, 100}, {500, 1024}, {2}, {1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

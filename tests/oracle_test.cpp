@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <random>
 
@@ -455,6 +456,51 @@ TEST(Oracle, SameTruthInMortonAndMeshOrder) {
         for (uint32_t t = 0; t < uint32_t(two.objects[o].mesh.triangleCount()); t += 1 + (o == 0))
             pcs.push_back({o, t});
     both([&] { return exactStage(two, pcs); });
+}
+
+// Trap: a Workspace keeps the previous call's arrays; a call that reads one of them stale (a
+// plane or record left from a larger scene, the grid's cell starts or entries not reset, the
+// planes of a scene that stores them read by one that does not, another object's world
+// positions) gives other pairs or counts than a fresh call. One workspace through scenes that
+// grow, shrink, change their number of objects, the exact stage on a subset, the welding option,
+// Embree's broad phase and a release, each against the same call without a workspace.
+TEST(Oracle, WorkspaceReuseGivesTheSameTruth) {
+    const Mesh cow = bundled("cow.off");
+    const Mesh subdivided = subdivide(cow);
+    Scene two = sceneOf({cow, cow});
+    two.objects[1].transform.translate(Vec3f(0.25f, 0.02f, 0.05f));
+    SceneRequest req;
+    req.triangles = 6000;
+    const Scene generated = makeTwoCows(cow, req).scene;
+    std::vector<TriangleRef> pcs;
+    for (uint32_t o = 0; o < 2; ++o)
+        for (uint32_t t = 0; t < uint32_t(two.objects[o].mesh.triangleCount()); t += 1 + o) pcs.push_back({o, t});
+    OracleOptions weld;
+    weld.weldByPosition = true;
+    OracleOptions embree;
+    embree.broadPhase = BroadPhase::Embree;
+    const std::vector<std::function<Truth(Workspace*)>> calls = {
+        [&](Workspace* w) { return findIntersections(sceneOf({subdivided}), {}, w); },
+        [&](Workspace* w) { return findIntersections(sceneOf({cow}), {}, w); },
+        [&](Workspace* w) { return findIntersections(two, {}, w); },
+        [&](Workspace* w) { return exactStage(two, pcs, {}, w); },
+        [&](Workspace* w) { return findIntersections(generated, weld, w); },
+        [&](Workspace* w) { return findIntersections(sceneOf({subdivided}), embree, w); },
+        [&](Workspace* w) { return findIntersections(sceneOf({subdivided, cow}), {}, w); },
+        [&](Workspace* w) { return findIntersections(sceneOf({cow}), {}, w); },
+    };
+    Workspace workspace;
+    for (int round = 0; round < 2; ++round) {
+        for (size_t k = 0; k < calls.size(); ++k) {
+            const Truth fresh = calls[k](nullptr), reused = calls[k](&workspace);
+            EXPECT_FALSE(fresh.pairs.empty()) << k;
+            EXPECT_EQ(reused.pairs, fresh.pairs) << "call " << k << ", round " << round;
+            EXPECT_EQ(reused.degenerate, fresh.degenerate) << k;
+            EXPECT_EQ(reused.trianglesTested, fresh.trianglesTested) << k;
+            EXPECT_EQ(reused.candidatePairs, fresh.candidatePairs) << k;
+        }
+        workspace.release();  // the second round starts from nothing again
+    }
 }
 
 }  // namespace

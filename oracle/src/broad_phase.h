@@ -6,6 +6,7 @@
 #include <bit>
 #include <cstdint>
 #include <span>
+#include <vector>
 
 namespace cullide::oracle::detail {
 
@@ -58,9 +59,21 @@ BroadPhaseTimes collideAll(std::span<const std::span<const Box>> objects, Candid
 // there keep their order), using tmp[0, n) as scratch; returns whichever holds the result.
 uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits);
 
+// The grid's arrays. With `keep` (a caller's oracle::Workspace) they stay allocated for the next
+// call, which reuses them; without, each goes as soon as it is no longer needed (the peak of one
+// call counts more than the next call's page faults).
+struct GridScratch {
+    bool keep = false;
+    Buffer<float> extent;  // per box: its largest extent (the cell size's median)
+    std::vector<uint64_t> raw;  // the entries in box order, before the counting sort (few cells)
+    std::vector<uint32_t> start;  // per cell: its first entry (few cells)
+    Buffer<uint64_t> entries;  // (cell, axes, box), sorted by cell
+};
+
 // The same pairs from a uniform grid (broad_phase_grid.cpp), each unordered pair once, as
-// (object0, prim0) < (object1, prim1). At most 2^29 boxes in all (std::length_error beyond);
-// throws std::bad_alloc otherwise only.
-BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user);
+// (object0, prim0) < (object1, prim1), its arrays in `scratch`. At most 2^29 boxes in all
+// (std::length_error beyond); throws std::bad_alloc otherwise only.
+BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user,
+                            GridScratch& scratch);
 
 }  // namespace cullide::oracle::detail

@@ -135,7 +135,8 @@ uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits) {
     return passes % 2 == 1 ? tmp : v;
 }
 
-BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user) {
+BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user,
+                            GridScratch& scratch) {
     BroadPhaseTimes times;
     auto t0 = std::chrono::steady_clock::now();
     // Global index g: objects one after another, primitives in order, so that g ascending is
@@ -168,7 +169,9 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     constexpr size_t kBlock = 16384;
     const size_t blocks = (n + kBlock - 1) / kBlock;
     std::vector<std::array<double, 6>> blockBounds(blocks);
-    Buffer<float> extent(n);
+    Buffer<float>& extent = scratch.extent;
+    extent.clear();
+    extent.resize(n);
     parallelForEach(0, blocks, [&](size_t blk) {
         std::array<double, 6> bb{1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
         for (size_t g = blk * kBlock, e = std::min(n, g + kBlock); g < e; ++g) {
@@ -186,7 +189,7 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     // 1.5 x the median extent: on bunny75k, 1 costs 10% more, 0.75 35% more, 0.5 sets most boxes
     // aside (over kMaxCellsPerBox cells); 2 and 2.5 cost the same within noise.
     double size = std::max(double(extent[n / 2]) * 1.5, 1e-30);
-    extent = {};
+    if (!scratch.keep) Buffer<float>().swap(extent);
     Grid grid;
     for (;;) {
         double cells = 1;
@@ -233,15 +236,18 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         return true;
     };
     std::vector<uint32_t> big;
-    Buffer<uint64_t> entryBuffer;
+    Buffer<uint64_t>& entryBuffer = scratch.entries;
+    entryBuffer.clear();
     if (cellCount <= kDirectCells) {
         // Few cells (meshes up to ~100k triangles): one counting sort by cell, serial, on the
         // entries generated once (a 6k mesh spent a sixth of its time generating them twice and
         // in the parallel passes' and the 256 buckets' fixed costs). The same order: cells
         // ascending, g ascending within a cell.
-        std::vector<uint64_t> raw;
+        std::vector<uint64_t>& raw = scratch.raw;
+        raw.clear();
         raw.reserve(4 * n);
-        std::vector<uint32_t> start(cellCount + 1, 0);  // cell c's entries from start[c]
+        std::vector<uint32_t>& start = scratch.start;  // cell c's entries from start[c]
+        start.assign(cellCount + 1, 0);
         for (size_t g = 0; g < n; ++g)
             if (!forEachEntry(g, [&](uint64_t entry) {
                     raw.push_back(entry);
@@ -251,6 +257,10 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         for (size_t c = 0; c < cellCount; ++c) start[c + 1] += start[c];
         entryBuffer.resize(raw.size());
         for (const uint64_t entry : raw) entryBuffer[start[entry >> 32]++] = entry;
+        if (!scratch.keep) {
+            std::vector<uint64_t>().swap(raw);
+            std::vector<uint32_t>().swap(start);
+        }
     } else {
         std::vector<size_t> slots(boxBlocks * 256, 0);
         std::vector<std::vector<uint32_t>> blockBig(boxBlocks);
@@ -276,9 +286,9 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         parallelForEach(0, 256, [&](size_t d) {
             const size_t m = bucket[d + 1] - bucket[d];
             if (m < 2 || lowPasses == 0) return;
-            std::unique_ptr<uint64_t[]> scratch(new uint64_t[m]);
-            sortBucket(entries + bucket[d], scratch.get(), m, lowPasses);
-            if (lowPasses % 2 == 1) std::copy(scratch.get(), scratch.get() + m, entries + bucket[d]);
+            std::unique_ptr<uint64_t[]> tmp(new uint64_t[m]);
+            sortBucket(entries + bucket[d], tmp.get(), m, lowPasses);
+            if (lowPasses % 2 == 1) std::copy(tmp.get(), tmp.get() + m, entries + bucket[d]);
         });
     }
     const size_t entryCount = entryBuffer.size();
@@ -377,6 +387,7 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
             if (!batch.empty()) fn(user, batch.data(), uint32_t(batch.size()));
         });
     }
+    if (!scratch.keep) Buffer<uint64_t>().swap(entryBuffer);
     times.collideSeconds = seconds(t0);
     return times;
 }

@@ -57,7 +57,7 @@ struct Local {
 };
 
 struct Context {
-    std::vector<ObjectData> objects;
+    std::vector<ObjectData>& objects;  // the call's own, or its workspace's
     bool storedPlanes = false;  // ObjectData::planes filled
     tbb::enumerable_thread_specific<Local> locals;
 };
@@ -70,6 +70,7 @@ PairClass toClass(Contact c) {
 void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
     Context& ctx = *static_cast<Context*>(user);
     Local& local = ctx.locals.local();
+    const ObjectData* const objects = ctx.objects.data();
     const Prim* last = nullptr;  // the grid hands over runs of pairs with the same first primitive
     detail::Plane plane;
     const bool stored = ctx.storedPlanes;
@@ -80,19 +81,19 @@ void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
         const Candidate& c = pairs[k];
         if (k + kAhead < count) {
             const Candidate& f = pairs[k + kAhead];
-            __builtin_prefetch(&ctx.objects[f.object1].prims[f.prim1]);
-            if (stored) __builtin_prefetch(&ctx.objects[f.object1].planes[f.prim1]);
+            __builtin_prefetch(&objects[f.object1].prims[f.prim1]);
+            if (stored) __builtin_prefetch(&objects[f.object1].planes[f.prim1]);
         }
         // The broad phase reports each unordered pair once (the filter is for one reporting
         // both orders); primitives are in spatial order, so order the triangles for the output.
         if (c.object0 > c.object1 || (c.object0 == c.object1 && c.prim0 >= c.prim1)) continue;
         ++local.candidates;
-        const Prim& a = ctx.objects[c.object0].prims[c.prim0];
-        const Prim& b = ctx.objects[c.object1].prims[c.prim1];
+        const Prim& a = objects[c.object0].prims[c.prim0];
+        const Prim& b = objects[c.object1].prims[c.prim1];
         Contact contact;
         if (stored) {
-            contact = detail::primContact(a, ctx.objects[c.object0].planes[c.prim0], b,
-                                          &ctx.objects[c.object1].planes[c.prim1], c.object0 == c.object1);
+            contact = detail::primContact(a, objects[c.object0].planes[c.prim0], b,
+                                          &objects[c.object1].planes[c.prim1], c.object0 == c.object1);
         } else {
             if (&a != last) plane = detail::planeOf(a), last = &a;
             contact = detail::primContact(a, plane, b, nullptr, c.object0 == c.object1);
@@ -176,6 +177,25 @@ void spatialOrder(std::span<const Vec3f> positions, std::span<const Triangle> tr
 
 }  // namespace
 
+// What a Workspace keeps: per object its arrays, the world positions, the grid's arrays.
+struct Workspace::Impl {
+    std::vector<ObjectData> objects;
+    Buffer<Vec3f> world;
+    detail::GridScratch grid;
+};
+
+Workspace::Workspace() : impl_(std::make_unique<Impl>()) {
+    impl_->grid.keep = true;
+}
+Workspace::~Workspace() = default;
+Workspace::Workspace(Workspace&&) noexcept = default;
+Workspace& Workspace::operator=(Workspace&&) noexcept = default;
+
+void Workspace::release() {
+    impl_ = std::make_unique<Impl>();
+    impl_->grid.keep = true;
+}
+
 // Measured (docs/oracle.md, session 11): on the bench's meshes of 5.8k to 46k triangles the
 // Morton order cost more (its sort, and the setup's and grid's reads through the permuted list)
 // than it saved; on bunny75k it still saves a little.
@@ -184,10 +204,14 @@ size_t detail::spatialOrderMin = size_t(1) << 16;
 namespace {
 
 // `subset`: per object, which triangles take part (null: all).
-Truth run(const Scene& scene, const OracleOptions& options, const std::vector<std::vector<char>>* subset) {
+Truth run(const Scene& scene, const OracleOptions& options, const std::vector<std::vector<char>>* subset,
+          Workspace* workspace) {
     const auto t0 = Clock::now();
     Truth truth;
-    Context ctx;
+    // Without a workspace, the call's own arrays (freed as they were before there were workspaces).
+    Workspace::Impl own;
+    Workspace::Impl& mem = workspace ? workspace->impl() : own;
+    Context ctx{mem.objects, false, {}};
     ctx.objects.resize(scene.objects.size());
     size_t allTriangles = 0;
     for (const Object& object : scene.objects) allTriangles += object.mesh.triangles.size();
@@ -199,7 +223,10 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
         const std::span<const Triangle> triangles = object.mesh.triangles;
         const size_t n = triangles.size(), nv = object.mesh.positions.size();
         // World positions (Scene::worldMesh's arithmetic, without copying the triangles).
-        Buffer<Vec3f> world(nv);
+        Buffer<Vec3f> ownWorld;  // without a workspace, freed with the object as before
+        Buffer<Vec3f>& world = workspace ? mem.world : ownWorld;
+        world.clear();
+        world.resize(nv);
         parallelFor(0, nv, 4096, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t v = r.begin(); v != r.end(); ++v)
                 world[v] = applyTransform(object.transform, object.mesh.positions[v]);
@@ -243,9 +270,11 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
             else kept.push_back(uint32_t(t));
         }
         if (kept.size() > detail::spatialOrderMin) spatialOrder(positions, triangles, kept);
-        d.prims = Buffer<Prim>(kept.size());
-        d.boxes = Buffer<Box>(kept.size());
-        if (ctx.storedPlanes) d.planes = Buffer<detail::Plane>(kept.size());
+        // clear() first: a longer array is allocated anew, not copied from the shorter one.
+        d.prims.clear(), d.boxes.clear(), d.planes.clear();
+        d.prims.resize(kept.size());
+        d.boxes.resize(kept.size());
+        if (ctx.storedPlanes) d.planes.resize(kept.size());
         parallelFor(0, kept.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t i = r.begin(); i != r.end(); ++i) {
                 const uint32_t t = kept[i];
@@ -279,7 +308,7 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
     for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = ctx.objects[o].boxes;
     const detail::BroadPhaseTimes bt = options.broadPhase == BroadPhase::Embree
         ? detail::collideAll(boxes, narrowPhase, &ctx)
-        : detail::collideGrid(boxes, narrowPhase, &ctx);
+        : detail::collideGrid(boxes, narrowPhase, &ctx, mem.grid);
     truth.buildSeconds = bt.buildSeconds;
     truth.collideSeconds = bt.collideSeconds;
 
@@ -314,11 +343,12 @@ BroadPhase parseBroadPhase(const std::string& text) {
     throw InputError("option --broad-phase", "unknown broad phase '" + text + "' (expected grid or embree)");
 }
 
-Truth findIntersections(const Scene& scene, const OracleOptions& options) {
-    return run(scene, options, nullptr);
+Truth findIntersections(const Scene& scene, const OracleOptions& options, Workspace* workspace) {
+    return run(scene, options, nullptr, workspace);
 }
 
-Truth exactStage(const Scene& scene, std::span<const TriangleRef> pcs, const OracleOptions& options) {
+Truth exactStage(const Scene& scene, std::span<const TriangleRef> pcs, const OracleOptions& options,
+                 Workspace* workspace) {
     std::vector<std::vector<char>> subset(scene.objects.size());
     for (size_t o = 0; o < scene.objects.size(); ++o) subset[o].assign(scene.objects[o].mesh.triangleCount(), 0);
     for (const TriangleRef& p : pcs) {
@@ -328,7 +358,7 @@ Truth exactStage(const Scene& scene, std::span<const TriangleRef> pcs, const Ora
                                  ") names no triangle of the scene");
         subset[p.object][p.triangle] = 1;
     }
-    return run(scene, options, &subset);
+    return run(scene, options, &subset, workspace);
 }
 
 }  // namespace cullide::oracle

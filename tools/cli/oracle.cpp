@@ -47,6 +47,10 @@ int runOracle(const OracleCommandOptions& o) {
     options.broadPhase = oracle::parseBroadPhase(o.broadPhase);
 
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+    // Over several frames the oracle's arrays are kept from one frame to the next (fresh pages
+    // cost a page fault each); one frame keeps nothing, so that its peak stays the promised one.
+    std::optional<oracle::Workspace> workspace;
+    if (last - first > 1) workspace.emplace();
     // Per frame: the oracle has no hook within a frame (and its results must not depend on one).
     study::Progress bar("oracle", last - first, "frames", o.progress);
     for (size_t f = first; f < last; ++f) {
@@ -61,7 +65,8 @@ int runOracle(const OracleCommandOptions& o) {
         // A still scene is its base scene: no copy of its meshes (18 MB on a 1M-triangle mesh).
         std::optional<Scene> moved;
         if (!animation.frames.empty()) moved = animation.sceneAt(f);
-        const oracle::Truth t = oracle::findIntersections(moved ? *moved : animation.scene, options);
+        const oracle::Truth t = oracle::findIntersections(moved ? *moved : animation.scene, options,
+                                                          workspace ? &*workspace : nullptr);
         size_t self = 0;
         for (const oracle::IntersectingPair& p : t.pairs) self += p.selfPair();
         bar.update(f - first + 1);
