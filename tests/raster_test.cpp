@@ -1214,7 +1214,8 @@ TEST(Differential, DirectPathEqualsScalarReferenceAndTiles) {
             o.scalarReference = false;
             o.threads = 1;
             o.simd = simd;
-            const std::string what = "seed " + std::to_string(seed) + (simd ? " simd " : " scalar ") + view.depth.name();
+            const std::string what =
+                "seed " + std::to_string(seed) + (simd ? " simd " : " scalar ") + view.depth.name();
             auto direct = backendFor(s.geo, view, o);
             for (int i = 0; i < 2; ++i) {  // the second list starts from the first's state, as run() does
                 Outcome got;

@@ -99,8 +99,9 @@ inline void exactSides2(const Prim& a, const Plane& pa, const Prim& b, int j, in
     const __m128d wx = _mm_sub_pd(pair(0), _mm_set1_pd(double(a.p[0][0])));
     const __m128d wy = _mm_sub_pd(pair(1), _mm_set1_pd(double(a.p[0][1])));
     const __m128d wz = _mm_sub_pd(pair(2), _mm_set1_pd(double(a.p[0][2])));
-    const __m128d det = _mm_add_pd(_mm_add_pd(_mm_mul_pd(wx, _mm_set1_pd(pa.n[0])), _mm_mul_pd(wy, _mm_set1_pd(pa.n[1]))),
-                                   _mm_mul_pd(wz, _mm_set1_pd(pa.n[2])));
+    const __m128d det =
+        _mm_add_pd(_mm_add_pd(_mm_mul_pd(wx, _mm_set1_pd(pa.n[0])), _mm_mul_pd(wy, _mm_set1_pd(pa.n[1]))),
+                   _mm_mul_pd(wz, _mm_set1_pd(pa.n[2])));
     const __m128d sign = _mm_set1_pd(-0.0);
     const __m128d permanent =
         _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_andnot_pd(sign, wx), _mm_set1_pd(pa.perm[0])),

@@ -184,16 +184,21 @@ struct Workspace::Impl {
     detail::GridScratch grid;
 };
 
-Workspace::Workspace() : impl_(std::make_unique<Impl>()) {
-    impl_->grid.keep = true;
-}
+Workspace::Workspace() = default;
 Workspace::~Workspace() = default;
 Workspace::Workspace(Workspace&&) noexcept = default;
 Workspace& Workspace::operator=(Workspace&&) noexcept = default;
 
 void Workspace::release() {
-    impl_ = std::make_unique<Impl>();
-    impl_->grid.keep = true;
+    impl_.reset();
+}
+
+Workspace::Impl& Workspace::impl() {
+    if (!impl_) {  // first use, or after release() or a move
+        impl_ = std::make_unique<Impl>();
+        impl_->grid.keep = true;
+    }
+    return *impl_;
 }
 
 // Measured (docs/oracle.md, session 11): on the bench's meshes of 5.8k to 46k triangles the

@@ -417,8 +417,9 @@ private:
         s.beyond = detail::beyondSides(window_[v], params_);
     }
 
-    // Steps 3-7 (step 1 is execute's, step 2 updateWindow's); a list that draws every triangle
-    // also captures its fragments for later lists under this view (view_cache.h).
+    // Steps 3-7 (step 1 is execute's, step 2 updateWindow's), or the direct path; a list that
+    // draws every triangle through the tiles also captures its fragments for later lists under
+    // this view (view_cache.h).
     std::vector<uint64_t> executeFast(const CommandList& list) {
         // One thread: a list that draws each range once goes straight through (direct_path.h),
         // not captured (a capture of such a list rasterizes every tile again: view_cache.h).

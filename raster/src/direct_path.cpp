@@ -50,7 +50,8 @@ std::vector<uint64_t> executeDirect(const CommandList& list, const SetupInput& i
         for (uint32_t lo = c.first; lo < end; lo += kBlock) {
             const uint32_t hi = std::min(end, lo + kBlock);
             countHints(in.triangles, in.snapped.data(), params, batched, lo, hi, hint);
-            // The one-record triangles, set up four at a time as setupDrawn does.
+            // The one-record triangles, set up four at a time as setupDrawn does (a triangle
+            // without a record is written to the next lane too, which the next one overwrites).
             uint32_t n = 0;
             for (uint32_t t = lo; t < hi; ++t) {
                 const uint8_t h = hint[t - lo];
@@ -65,7 +66,8 @@ std::vector<uint64_t> executeDirect(const CommandList& list, const SetupInput& i
                     EdgeTri* const out[4] = {&recs[k], &recs[k + 1], &recs[k + 2], &recs[k + 3]};
                     setupInsideEdgeTri4(batch[k / 4], in.window.data(), in.snapped.data(), params, out);
                 }
-            for (; k < n; ++k) setupInsideLane(batch[k / 4], int(k % 4), in.window.data(), in.snapped.data(), params, recs[k]);
+            for (; k < n; ++k)
+                setupInsideLane(batch[k / 4], int(k % 4), in.window.data(), in.snapped.data(), params, recs[k]);
             // In triangle order: the records, and the clipped triangles' sub-triangles.
             k = 0;
             for (uint32_t t = lo; t < hi; ++t) {

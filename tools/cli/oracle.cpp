@@ -65,8 +65,8 @@ int runOracle(const OracleCommandOptions& o) {
         // A still scene is its base scene: no copy of its meshes (18 MB on a 1M-triangle mesh).
         std::optional<Scene> moved;
         if (!animation.frames.empty()) moved = animation.sceneAt(f);
-        const oracle::Truth t = oracle::findIntersections(moved ? *moved : animation.scene, options,
-                                                          workspace ? &*workspace : nullptr);
+        const oracle::Truth t =
+            oracle::findIntersections(moved ? *moved : animation.scene, options, workspace ? &*workspace : nullptr);
         size_t self = 0;
         for (const oracle::IntersectingPair& p : t.pairs) self += p.selfPair();
         bar.update(f - first + 1);

@@ -107,10 +107,10 @@ public:
     ~Workspace();
     Workspace(Workspace&&) noexcept;
     Workspace& operator=(Workspace&&) noexcept;
-    void release();  // gives the memory back (the workspace stays usable)
+    void release();  // gives the memory back (the workspace stays usable, as after a move)
 
     struct Impl;  // oracle.cpp's
-    Impl& impl() { return *impl_; }
+    Impl& impl();  // made on first use
 
 private:
     std::unique_ptr<Impl> impl_;
