@@ -425,10 +425,8 @@ private:
         // not captured (a capture of such a list rasterizes every tile again: view_cache.h).
         directRan_ = options_.direct && arena_.max_concurrency() == 1 && detail::directEligible(list);
         if (directRan_) {
-            const detail::RasterTable table =
-                detail::pickRasterTable(view_.depth.kind == DepthFormat::Kind::Float32, options_.simd);
             const detail::SetupInput in{triangles_, window_, snapped_, params_, grid_, options_.simd};
-            return detail::executeDirect(list, in, table, view_.depth, state_, depth_.data(), stats_);
+            return detail::executeDirect(list, in, rasterTable(), view_.depth, state_, depth_.data(), stats_);
         }
         detail::StateWalker walk(state_, list.queryCount());
         setupRecords(list);
@@ -493,10 +491,14 @@ private:
         detail::binEvents(grid_, plain, conservative, events_);
     }
 
+    // The pixel loops for this view's depth format (tile_kernels.h).
+    detail::RasterTable rasterTable() const {
+        return detail::pickRasterTable(view_.depth.kind == DepthFormat::Kind::Float32, options_.simd);
+    }
+
     // Step 6: one task per tile; with `capture`, each tile's fragments into it too.
     void runTiles(detail::ViewFragments* capture) {
-        const bool isFloat = view_.depth.kind == DepthFormat::Kind::Float32;
-        const detail::RasterTable table = detail::pickRasterTable(isFloat, options_.simd);
+        const detail::RasterTable table = rasterTable();
         const detail::TileJob job{events_,      plain_, conservative_, table,       view_.depth, view_.width,
                                   view_.height, grid_,  depth_.data(), ilo_.data(), ihi_.data()};
         parallelFor(0, grid_.count(), 1, [&](const tbb::blocked_range<size_t>& r) {
