@@ -24,11 +24,13 @@ std::vector<uint64_t> executeDirect(const CommandList& list, const SetupInput& i
     params.dropEmpty = true;  // as setupDrawn
     const int W = params.width, H = params.height, bits = format.bits;
     const bool batched = in.simd && haveSetupAvx2();
-    // A block's records: 12 KiB, in the L1 cache while they are rasterized.
+    // A block's records: 12 KiB, and their small forms 3 KiB, in the L1 cache while they are rasterized.
     constexpr uint32_t kBlock = 128;
     uint8_t hint[kBlock];
     InsideBatch batch[kBlock / 4];
     EdgeTri recs[kBlock];
+    SmallFrags small[kBlock];
+    uint32_t clipAt[kBlock][2];  // the block's clipped triangles: triangle, records before it
     SnappedTri sub[kMaxSubTriangles];
     FragGroup* noRecording = nullptr;  // the raster loops record nothing
     for (const Command& c : list.commands()) {
@@ -41,23 +43,29 @@ std::vector<uint64_t> executeDirect(const CommandList& list, const SetupInput& i
         ++stats.draws;
         stats.triangles += c.count;
         const RasterFn raster = table.raster[size_t(walk.func())];
+        const RunRecordsFn runRecords = table.runRecords[size_t(walk.func())];
         const bool mask = walk.mask();
         uint64_t fragments = 0, passed = 0, rejected = 0, clipped = 0, zeroArea = 0;
-        auto draw = [&](const EdgeTri& e) {
-            raster(e, 0, 0, W - 1, H - 1, depth, size_t(W), mask, bits, fragments, passed, noRecording);
-        };
         const uint32_t end = c.first + c.count;
         for (uint32_t lo = c.first; lo < end; lo += kBlock) {
             const uint32_t hi = std::min(end, lo + kBlock);
             countHints(in.triangles, in.snapped.data(), params, batched, lo, hi, hint);
             // The one-record triangles, set up four at a time as setupDrawn does (a triangle
-            // without a record is written to the next lane too, which the next one overwrites).
-            uint32_t n = 0;
+            // without a record is written to the next lane too, which the next one overwrites);
+            // the clipped ones noted, the others' flags counted.
+            uint32_t n = 0, clips = 0;
             for (uint32_t t = lo; t < hi; ++t) {
                 const uint8_t h = hint[t - lo];
                 InsideBatch& b = batch[n / 4];
                 for (int k = 0; k < 3; ++k) b.v[k][n % 4] = in.triangles[t][k];
                 b.clockwise[n % 4] = h & kHintCw ? -1 : 0;
+                if (h & kHintClip) {
+                    clipAt[clips][0] = t;
+                    clipAt[clips++][1] = n;
+                }
+                const bool none = (h & (kHintOne | kHintClip)) == 0;  // the hint is the flags
+                rejected += none & ((h & kRejected) != 0);
+                zeroArea += none & ((h & kZeroArea) != 0);
                 n += (h & kHintOne) != 0;
             }
             uint32_t k = 0;
@@ -68,27 +76,26 @@ std::vector<uint64_t> executeDirect(const CommandList& list, const SetupInput& i
                 }
             for (; k < n; ++k)
                 setupInsideLane(batch[k / 4], int(k % 4), in.window.data(), in.snapped.data(), params, recs[k]);
-            // In triangle order: the records, and the clipped triangles' sub-triangles.
-            k = 0;
-            for (uint32_t t = lo; t < hi; ++t) {
-                const uint8_t h = hint[t - lo];
-                if (h & kHintOne) {
-                    draw(recs[k++]);
-                } else if (h & kHintClip) {
-                    const Triangle& tri = in.triangles[t];
-                    int count = 0;
-                    const uint8_t flags =
-                        setupTriangle(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]], params, sub, count);
-                    rejected += (flags & kRejected) != 0;
-                    clipped += (flags & kClipped) != 0;
-                    zeroArea += (flags & kZeroArea) != 0;
-                    for (int s = 0; s < count; ++s) {
-                        EdgeTri e;
-                        if (makeEdgeTri(sub[s], params, e)) draw(e);
-                    }
-                } else {  // no record: the hint is the triangle's flags
-                    rejected += (h & kRejected) != 0;
-                    zeroArea += (h & kZeroArea) != 0;
+            if (table.prepare) table.prepare(recs, n, size_t(W), bits, small);
+            // In triangle order: the records between the clipped triangles, and their sub-triangles.
+            uint32_t done = 0;
+            for (uint32_t m = 0; m <= clips; ++m) {
+                const uint32_t upTo = m < clips ? clipAt[m][1] : n;
+                runRecords(recs + done, small + done, upTo - done, raster, W, H, depth, size_t(W), mask, bits,
+                           fragments, passed);
+                done = upTo;
+                if (m == clips) break;
+                const Triangle& tri = in.triangles[clipAt[m][0]];
+                int count = 0;
+                const uint8_t flags =
+                    setupTriangle(in.window[tri[0]], in.window[tri[1]], in.window[tri[2]], params, sub, count);
+                rejected += (flags & kRejected) != 0;
+                clipped += (flags & kClipped) != 0;
+                zeroArea += (flags & kZeroArea) != 0;
+                for (int s = 0; s < count; ++s) {
+                    EdgeTri e;
+                    if (makeEdgeTri(sub[s], params, e))
+                        raster(e, 0, 0, W - 1, H - 1, depth, size_t(W), mask, bits, fragments, passed, noRecording);
                 }
             }
         }

@@ -18,11 +18,34 @@ using RasterFn = void (*)(const EdgeTri&, int, int, int, int, uint32_t*, size_t,
                           FragGroup*&);
 using ReplayFn = void (*)(const FragGroup*, const FragGroup*, uint32_t*, bool, uint64_t&, uint64_t&);
 
+// The direct path's (direct_path.h) form of a record whose pixel box is at most 2 x 2: its
+// fragments and their incoming depth codes, computed for a block of records before any of them is
+// tested, so that the arithmetic of many records overlaps and only the tests and writes stay in
+// order. Lane l is pixel (x0 + (l & 1), y0 + (l >> 1)).
+struct SmallFrags {
+    uint32_t pixel;  // depth-buffer index of (x0, y0)
+    uint32_t lanes;  // bit l: lane l is a fragment; kNotSmall: a larger record, for the pixel loop
+    uint32_t z[4];  // incoming depth codes
+};
+inline constexpr uint32_t kNotSmall = 16;
+// prepare(records, n, stride, bits, out): out[k] for records[k], k < n.
+using PrepareFn = void (*)(const EdgeTri*, uint32_t, size_t, int, SmallFrags*);
+// runRecords(records, small, n, raster, width, height, depth, stride, mask, bits, fragments,
+// passed): records [0, n) in order over the whole viewport, the small ones from `small`
+// (prepared), the others through `raster` (the same depth function's pixel loop); the same
+// fragments, tests and writes as the pixel loop on every record.
+using RunRecordsFn = void (*)(const EdgeTri*, const SmallFrags*, uint32_t, RasterFn, int, int, uint32_t*, size_t, bool,
+                              int, uint64_t&, uint64_t&);
+
 // The pixel loops for one CPU and depth format, indexed by DepthFunc: rasterizing (raster),
-// rasterizing and recording (record), replaying (replay).
+// rasterizing and recording (record), replaying (replay), the direct path's runs of records
+// (runRecords); and the direct path's preparation of small records (null: none, runRecords
+// rasterizes every record).
 struct RasterTable {
     std::array<RasterFn, 8> raster, record;
     std::array<ReplayFn, 8> replay;
+    std::array<RunRecordsFn, 8> runRecords;
+    PrepareFn prepare = nullptr;
 };
 
 // The hot loops for this CPU: AVX2 when asked for and present, else the scalar loops.
