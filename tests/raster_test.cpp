@@ -1254,6 +1254,62 @@ TEST(Differential, DirectPathEqualsScalarReferenceAndTiles) {
     EXPECT_FALSE(two->lastRanDirect());
 }
 
+// Trap: on the direct path the four-wide setup computes the fragments and depth codes of records
+// at most 2 x 2 pixels from its lanes (SmallFrags) and writes no record for them. A triangle
+// collinear in window coordinates but not after snapping has no plane from its vertices
+// (planeFrom's fallback, set up by the scalar step): a small form made from the lane's registers
+// anyway would carry a NaN or wrong plane, and one left unmade would rasterize a record never
+// written. ~1 px triangles, a third of them collinear (their window coordinates are the positions:
+// a 16 x 16 view of [0, 16]^2), in every lane of the batches of four; every format, both fill
+// rules; against the scalar path.
+TEST(Differential, DirectPathSmallTrianglesWithoutAVertexPlane) {
+    const DepthFormat formats[] = {DepthFormat::unorm(16), DepthFormat::unorm(24), DepthFormat::float32()};
+    for (uint64_t seed = 0; seed < 6; ++seed) {
+        std::mt19937_64 rng(seed + 700);
+        auto ticks = [&](int n) { return float(int(rng() % uint64_t(n))) / 1024.0f; };  // exact in float
+        RandomScene s;
+        RandomScene collinearOnly;
+        for (int t = 0; t < 1200; ++t) {
+            const float x = float(1 + rng() % 13) + ticks(1024), y = float(1 + rng() % 13) + ticks(1024);
+            const float z = 0.1f + 0.8f * ticks(1024);
+            if (rng() % 3 == 0) {  // p0, p0 + d, p0 + 2d: det = d.x * 2d.y - 2d.x * d.y = 0 exactly
+                const float dx = ticks(768), dy = ticks(1536) - 0.75f, dz = ticks(64);
+                const Vec3f p0(x, y, z), p1(x + dx, y + dy, z + dz), p2(x + 2 * dx, y + 2 * dy, z - dz);
+                s.geo.tri(p0, p1, p2);
+                collinearOnly.geo.tri(p0, p1, p2);
+            } else {
+                s.geo.tri({x, y, z}, {x + 1.5f - ticks(512), y + ticks(256), z + ticks(64)},
+                          {x + ticks(256), y + 1.5f - ticks(512), z - ticks(64)});
+            }
+        }
+        const uint32_t n = uint32_t(s.geo.triangles.size()), nc = uint32_t(collinearOnly.geo.triangles.size());
+        s.list.clear();
+        s.list.beginQuery(QueryKind::SamplesPassed);
+        s.list.draw(0, n);
+        s.list.endQuery();
+        collinearOnly.list.clear();
+        collinearOnly.list.draw(0, nc);
+        const OrthoView view = windowView(16, 16, formats[seed % 3]);
+        CpuBackendOptions ref;
+        ref.scalarReference = true;
+        ref.fillRule = seed % 2 ? FillRule::BottomLeft : FillRule::TopLeft;
+        ref.subpixelBits = 1 + int(seed % 2);  // coarse: snapping moves a vertex by up to 1/4 or 1/8 pixel
+        // The trap is armed: collinear triangles that snap to a non-zero area and cover a centre.
+        EXPECT_GT(run(collinearOnly, view, ref).stats.fragments, 10u) << "seed " << seed;
+        const Outcome expected = run(s, view, ref);
+        CpuBackendOptions o = ref;
+        o.scalarReference = false;
+        o.threads = 1;
+        auto direct = backendFor(s.geo, view, o);
+        Outcome got;
+        got.results = direct->execute(s.list);
+        got.stats = direct->lastStats();
+        got.depth = direct->readDepth();
+        EXPECT_TRUE(direct->lastRanDirect());
+        expectSame(expected, got, "seed " + std::to_string(seed) + " " + view.depth.name());
+    }
+}
+
 // Trap: setup writes each chunk of 1024 triangles into a slot of one record per triangle; a chunk
 // of triangles clipped into several sub-triangles outgrows its slot, spills, and every slot moves
 // (records.cpp). A wrong shift of the record ranges, a spilled chunk's records lost, or a spill

@@ -23,6 +23,7 @@ std::vector<uint64_t> executeDirect(const CommandList& list, const SetupInput& i
     SetupParams params = in.params;
     params.dropEmpty = true;  // as setupDrawn
     const int W = params.width, H = params.height, bits = format.bits;
+    const bool isFloat = format.kind == DepthFormat::Kind::Float32;
     const bool batched = in.simd && haveSetupAvx2();
     // A block's records: 12 KiB, and their small forms 3 KiB, in the L1 cache while they are rasterized.
     constexpr uint32_t kBlock = 128;
@@ -68,15 +69,20 @@ std::vector<uint64_t> executeDirect(const CommandList& list, const SetupInput& i
                 zeroArea += none & ((h & kZeroArea) != 0);
                 n += (h & kHintOne) != 0;
             }
+            // With the pixel loops' preparation (AVX2), the four-wide setup makes the small forms
+            // too; the scalar step's records are prepared from the records.
             uint32_t k = 0;
             if (batched)
                 for (; k + 4 <= n; k += 4) {
                     EdgeTri* const out[4] = {&recs[k], &recs[k + 1], &recs[k + 2], &recs[k + 3]};
-                    setupInsideEdgeTri4(batch[k / 4], in.window.data(), in.snapped.data(), params, out);
+                    const SmallOut forms{small + k, size_t(W), bits, isFloat};
+                    setupInsideEdgeTri4(batch[k / 4], in.window.data(), in.snapped.data(), params, out,
+                                        table.prepare ? &forms : nullptr);
                 }
+            const uint32_t scalarFrom = k;
             for (; k < n; ++k)
                 setupInsideLane(batch[k / 4], int(k % 4), in.window.data(), in.snapped.data(), params, recs[k]);
-            if (table.prepare) table.prepare(recs, n, size_t(W), bits, small);
+            if (table.prepare) table.prepare(recs + scalarFrom, n - scalarFrom, size_t(W), bits, small + scalarFrom);
             // In triangle order: the records between the clipped triangles, and their sub-triangles.
             uint32_t done = 0;
             for (uint32_t m = 0; m <= clips; ++m) {

@@ -1,6 +1,8 @@
 // The per-tile work of the fast path of the CPU backend (tile_kernels.h).
 #include "tile_kernels.h"
 
+#include "depth_simd.h"
+
 #include <algorithm>
 #include <bit>
 #include <utility>
@@ -87,30 +89,6 @@ __attribute__((target("avx2"))) inline __m128i depthTest4(__m128i incoming, __m1
     else if constexpr (F == DepthFunc::GEqual) ok = _mm_xor_si128(_mm_cmpgt_epi32(ss, si), all);
     else ok = all;
     return _mm_and_si128(ok, lanes);
-}
-
-// clampDepth and the encoding of rules.h on four lanes (`bits`: unorm bits; unused for Float).
-template <bool Float>
-__attribute__((target("avx2"))) inline __m128i clampEncode4(__m256d z, int bits) {
-    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
-    z = _mm256_and_pd(z, _mm256_cmp_pd(z, zero, _CMP_GT_OQ));  // !(z > 0): +0 (NaN too)
-    z = _mm256_blendv_pd(z, one, _mm256_cmp_pd(z, one, _CMP_GT_OQ));
-    if constexpr (Float) {
-        return _mm_castps_si128(_mm256_cvtpd_ps(z));  // round to nearest, as float(z)
-    } else {
-        const __m256d a = _mm256_mul_pd(z, _mm256_set1_pd(double(uint64_t(1) << bits)));
-        const __m256d f = _mm256_round_pd(a, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
-        const __m256d r = _mm256_sub_pd(a, f);
-        const __m256d up =
-            _mm256_and_pd(_mm256_cmp_pd(r, half, _CMP_GE_OQ), _mm256_cmp_pd(_mm256_sub_pd(r, half), z, _CMP_GE_OQ));
-        const __m256d down =
-            _mm256_and_pd(_mm256_cmp_pd(r, half, _CMP_LT_OQ), _mm256_cmp_pd(_mm256_add_pd(r, half), z, _CMP_LT_OQ));
-        const __m256d code = _mm256_sub_pd(_mm256_add_pd(f, _mm256_and_pd(up, one)), _mm256_and_pd(down, one));
-        // An integer below 2^32 plus 2^52 holds it in its low 32 bits.
-        return _mm256_castsi256_si128(
-            _mm256_permutevar8x32_epi32(_mm256_castpd_si256(_mm256_add_pd(code, _mm256_set1_pd(0x1p52))),
-                                        _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0)));
-    }
 }
 
 // A record whose rectangle, clipped to the tile, is one or two pixels wide (most, on meshes finer
@@ -270,7 +248,7 @@ __attribute__((target("avx2"))) void prepareSmallAvx2(const EdgeTri* recs, uint3
 
 // The direct path's run of records (RunRecordsFn): a small record's tests and writes as
 // rasterizeNarrowAvx2's, with no branch on its fragments or outcomes.
-template <DepthFunc F, bool Float>
+template <DepthFunc F>
 __attribute__((target("avx2"))) void runRecordsAvx2(const EdgeTri* recs, const SmallFrags* small, uint32_t n,
                                                     RasterFn raster, int width, int height, uint32_t* depth,
                                                     size_t stride, bool mask, int bits, uint64_t& fragments,
@@ -408,7 +386,7 @@ template <DepthFunc F, bool Float, bool Record>
 struct Avx2Kernel {
     static constexpr RasterFn run = &rasterizeInTileAvx2<F, Float, Record>;
     static constexpr ReplayFn replay = &replayFragmentsAvx2<F>;
-    static constexpr RunRecordsFn runRecords = &runRecordsAvx2<F, Float>;
+    static constexpr RunRecordsFn runRecords = &runRecordsAvx2<F>;
     static constexpr PrepareFn prepare = &prepareSmallAvx2<Float>;
 };
 #endif

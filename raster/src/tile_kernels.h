@@ -18,16 +18,6 @@ using RasterFn = void (*)(const EdgeTri&, int, int, int, int, uint32_t*, size_t,
                           FragGroup*&);
 using ReplayFn = void (*)(const FragGroup*, const FragGroup*, uint32_t*, bool, uint64_t&, uint64_t&);
 
-// The direct path's (direct_path.h) form of a record whose pixel box is at most 2 x 2: its
-// fragments and their incoming depth codes, computed for a block of records before any of them is
-// tested, so that the arithmetic of many records overlaps and only the tests and writes stay in
-// order. Lane l is pixel (x0 + (l & 1), y0 + (l >> 1)).
-struct SmallFrags {
-    uint32_t pixel;  // depth-buffer index of (x0, y0)
-    uint32_t lanes;  // bit l: lane l is a fragment; kNotSmall: a larger record, for the pixel loop
-    uint32_t z[4];  // incoming depth codes
-};
-inline constexpr uint32_t kNotSmall = 16;
 // prepare(records, n, stride, bits, out): out[k] for records[k], k < n.
 using PrepareFn = void (*)(const EdgeTri*, uint32_t, size_t, int, SmallFrags*);
 // runRecords(records, small, n, raster, width, height, depth, stride, mask, bits, fragments,

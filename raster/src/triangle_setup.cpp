@@ -5,6 +5,8 @@
 // interpolation); Mesa llvmpipe lp_setup_tri.c (snapping, edge functions, float depth plane).
 #include "triangle_setup.h"
 
+#include "depth_simd.h"
+
 #include "cullide/error.h"
 
 #include <algorithm>
@@ -290,11 +292,67 @@ __attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s,
     return _mm256_or_si256(_mm256_srl_epi64(v, s), _mm256_sll_epi64(negative, rest));
 }
 
+// The small forms (SmallFrags) of the four lanes of setupInsideEdgeTri4, from its registers: per
+// pixel of the 2 x 2 block at (i0, j0), the edge functions a*i + b*j + c (integers: the pixel
+// loops' values) and the depth (z0 + dzdy*((j + 0.5) - y0)) + dzdx*((i + 0.5) - x0), DepthPlane's
+// operations in its order, so the same fragments and codes. `planeOk`: the lanes whose plane is
+// these registers' (the others were set up by the scalar step). Returns the lanes given a form (the
+// others get kNotSmall).
+__attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i j0, __m128i j1, const __m256i a[3],
+                                                 const __m256i b[3], const __m256i c[3], __m256d x0, __m256d y0,
+                                                 __m256d z0, __m256d dzdx, __m256d dzdy, int planeOk,
+                                                 const SmallOut& small) {
+    const __m128i one = _mm_set1_epi32(1), two = _mm_set1_epi32(2);
+    const __m128i w = _mm_sub_epi32(i1, i0), h = _mm_sub_epi32(j1, j0);  // >= 0: the box holds a centre
+    const int fits = _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(_mm_cmpgt_epi32(two, w), _mm_cmpgt_epi32(two, h))));
+    const int smallLanes = fits & planeOk;
+    SmallFrags* const out = small.out;
+    if (smallLanes == 0) {
+        for (int l = 0; l < 4; ++l) out[l].lanes = kNotSmall;
+        return 0;
+    }
+    const int wide = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(w, one)));
+    const int tall = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(h, one)));
+    const int valid[4] = {15, wide, tall, wide & tall};  // per pixel, the lanes whose box holds it
+    __m128 codes[4];
+    int inside[4];
+    for (int p = 0; p < 4; ++p) {
+        const __m128i i = p & 1 ? _mm_add_epi32(i0, one) : i0, j = p & 2 ? _mm_add_epi32(j0, one) : j0;
+        const __m256i i64 = _mm256_cvtepi32_epi64(i), j64 = _mm256_cvtepi32_epi64(j);
+        __m256i any = _mm256_setzero_si256();
+        for (int k = 0; k < 3; ++k)
+            any = _mm256_or_si256(any, _mm256_add_epi64(_mm256_add_epi64(c[k], _mm256_mul_epi32(a[k], i64)),
+                                                        _mm256_mul_epi32(b[k], j64)));
+        inside[p] = ~_mm256_movemask_pd(_mm256_castsi256_pd(any)) & valid[p];
+        const __m256d half = _mm256_set1_pd(0.5);
+        const __m256d cx = _mm256_add_pd(_mm256_cvtepi32_pd(i), half), cy = _mm256_add_pd(_mm256_cvtepi32_pd(j), half);
+        const __m256d z =
+            _mm256_add_pd(_mm256_add_pd(z0, _mm256_mul_pd(dzdy, _mm256_sub_pd(cy, y0))), _mm256_mul_pd(dzdx, _mm256_sub_pd(cx, x0)));
+        codes[p] = _mm_castsi128_ps(small.isFloat ? clampEncode4<true>(z, small.bits) : clampEncode4<false>(z, small.bits));
+    }
+    _MM_TRANSPOSE4_PS(codes[0], codes[1], codes[2], codes[3]);  // now per lane: its four pixels
+    alignas(16) int32_t ci[4], cj[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(ci), i0);
+    _mm_store_si128(reinterpret_cast<__m128i*>(cj), j0);
+    for (int l = 0; l < 4; ++l) {
+        SmallFrags& f = out[l];
+        if (!(smallLanes >> l & 1)) {
+            f.lanes = kNotSmall;
+            continue;
+        }
+        f.pixel = uint32_t(size_t(cj[l]) * small.stride + size_t(ci[l]));
+        f.lanes = uint32_t((inside[0] >> l & 1) | (inside[1] >> l & 1) << 1 | (inside[2] >> l & 1) << 2 |
+                           (inside[3] >> l & 1) << 3);
+        _mm_storeu_ps(reinterpret_cast<float*>(f.z), codes[l]);
+    }
+    return smallLanes;
+}
+
 }  // namespace
 
 __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, const WinVertex* window,
                                                          const SnapVertex* snapped, const SetupParams& params,
-                                                         EdgeTri* const out[4]) {
+                                                         EdgeTri* const out[4], const SmallOut* small) {
     const int S = params.subpixelBits;
     const __m128i s = _mm_cvtsi32_si128(S), rest = _mm_cvtsi32_si128(64 - S);
     const __m128i zero = _mm_setzero_si128(), half = _mm_set1_epi32(1 << (S - 1));
@@ -322,20 +380,21 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
     const __m128i maxx = _mm_max_epi32(_mm_max_epi32(x[0], x[1]), x[2]);
     const __m128i miny = _mm_min_epi32(_mm_min_epi32(y[0], y[1]), y[2]);
     const __m128i maxy = _mm_max_epi32(_mm_max_epi32(y[0], y[1]), y[2]);
+    const __m128i i0 = _mm_max_epi32(_mm_sub_epi32(zero, _mm_sra_epi32(_mm_sub_epi32(half, minx), s)), zero);
+    const __m128i i1 = _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxx, half), s), _mm_set1_epi32(params.width - 1));
+    const __m128i j0 = _mm_max_epi32(_mm_sub_epi32(zero, _mm_sra_epi32(_mm_sub_epi32(half, miny), s)), zero);
+    const __m128i j1 = _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxy, half), s), _mm_set1_epi32(params.height - 1));
     alignas(16) int32_t box[4][4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(box[0]),
-                    _mm_max_epi32(_mm_sub_epi32(zero, _mm_sra_epi32(_mm_sub_epi32(half, minx), s)), zero));
-    _mm_store_si128(reinterpret_cast<__m128i*>(box[1]),
-                    _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxx, half), s), _mm_set1_epi32(params.width - 1)));
-    _mm_store_si128(reinterpret_cast<__m128i*>(box[2]),
-                    _mm_max_epi32(_mm_sub_epi32(zero, _mm_sra_epi32(_mm_sub_epi32(half, miny), s)), zero));
-    _mm_store_si128(reinterpret_cast<__m128i*>(box[3]),
-                    _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxy, half), s), _mm_set1_epi32(params.height - 1)));
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[0]), i0);
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[1]), i1);
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[2]), j0);
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[3]), j1);
     // The edges, as makeEdgeTri; the products in 64 bits (_mm256_mul_epi32 multiplies the low 32
     // bits of each lane, signed: every factor fits them).
     const bool bottomLeft = params.fillRule == FillRule::BottomLeft;
     alignas(16) int32_t ea[3][4], eb[3][4];
     alignas(32) int64_t ec[3][4];
+    __m256i a64[3], b64[3], c64[3];  // for the small forms
     for (int k = 0; k < 3; ++k) {
         const int n = k == 2 ? 0 : k + 1;
         const __m128i dx = _mm_sub_epi32(x[n], x[k]), dy = _mm_sub_epi32(y[n], y[k]);
@@ -348,7 +407,10 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
         const __m256i c = _mm256_sub_epi64(_mm256_sub_epi64(p, q), _mm256_cvtepi32_epi64(exclusive));
         _mm_store_si128(reinterpret_cast<__m128i*>(ea[k]), _mm_sub_epi32(zero, dy));
         _mm_store_si128(reinterpret_cast<__m128i*>(eb[k]), dx);
-        _mm256_store_si256(reinterpret_cast<__m256i*>(ec[k]), floorShift4(c, s, rest));
+        a64[k] = _mm256_cvtepi32_epi64(_mm_sub_epi32(zero, dy));
+        b64[k] = _mm256_cvtepi32_epi64(dx);
+        c64[k] = floorShift4(c, s, rest);
+        _mm256_store_si256(reinterpret_cast<__m256i*>(ec[k]), c64[k]);
     }
     // The depth plane, as planeFrom, in the triangle's own vertex order.
     const __m256d x0 = wx[0], y0 = wy[0], z0 = wz[0];
@@ -366,10 +428,13 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
     const __m256d ok = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(det, _mm256_setzero_pd(), _CMP_NEQ_OQ), finiteDet),
                                      _mm256_and_pd(finiteX, finiteY));
     const int planeOk = _mm256_movemask_pd(ok);
+    // The lanes with a small form need no record (the direct path reads only the others').
+    const int formed = small ? smallForms4(i0, i1, j0, j1, a64, b64, c64, x0, y0, z0, dzdx, dzdy, planeOk, *small) : 0;
     alignas(32) double gx[4], gy[4];
     _mm256_store_pd(gx, dzdx);
     _mm256_store_pd(gy, dzdy);
     for (int l = 0; l < 4; ++l) {
+        if (formed >> l & 1) continue;
         EdgeTri& e = *out[l];
         if (!(planeOk >> l & 1)) {
             setupInsideLane(b, l, window, snapped, params, e);
@@ -396,7 +461,7 @@ bool haveSetupAvx2() {
 }
 
 void setupInsideEdgeTri4(const InsideBatch&, const WinVertex*, const SnapVertex*, const SetupParams&,
-                         EdgeTri* const[4]) {
+                         EdgeTri* const[4], const SmallOut*) {
     CULLIDE_CHECK(false, "setupInsideEdgeTri4 without AVX2");
 }
 

@@ -4,6 +4,7 @@
 
 #include "cullide/raster/rules.h"
 
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 
@@ -130,11 +131,34 @@ void setupInsideLane(const InsideBatch& batch, int l, const WinVertex* window, c
 // form in records.cpp).
 bool haveSetupAvx2();
 
+// The direct path's (direct_path.h) form of a record whose pixel box is at most 2 x 2: its
+// fragments and their incoming depth codes, computed for a block of records before any of them is
+// tested, so that the arithmetic of many records overlaps and only the tests and writes stay in
+// order. Lane l is pixel (x0 + (l & 1), y0 + (l >> 1)); the same fragments and codes as the pixel
+// loops give the record (tile_kernels.h).
+struct SmallFrags {
+    uint32_t pixel;  // depth-buffer index of (x0, y0)
+    uint32_t lanes;  // bit l: lane l is a fragment; kNotSmall: a larger record, for the pixel loop
+    uint32_t z[4];  // incoming depth codes
+};
+inline constexpr uint32_t kNotSmall = 16;
+
+// Where setupInsideEdgeTri4 also writes its records' small forms: out[0..4), for a depth buffer
+// `stride` pixels wide in the format (isFloat, bits).
+struct SmallOut {
+    SmallFrags* out;
+    size_t stride;
+    int bits;
+    bool isFloat;
+};
+
 // setupInsideEdgeTri on the four triangles of `batch` at once with AVX2 (haveSetupAvx2()), their
 // vertices read from `window` and `snapped`: the same integer and double operations in the same
 // order (no FMA), so the same four records bit for bit. A lane whose depth plane needs
-// planeFrom's fallback is set up by the scalar step.
+// planeFrom's fallback is set up by the scalar step. With `small`, the records' small forms from
+// the lanes instead, where they have one (the record is then not written); a lane set up by the
+// scalar step, or with a larger box, gets kNotSmall and its record.
 void setupInsideEdgeTri4(const InsideBatch& batch, const WinVertex* window, const SnapVertex* snapped,
-                         const SetupParams& params, EdgeTri* const out[4]);
+                         const SetupParams& params, EdgeTri* const out[4], const SmallOut* small = nullptr);
 
 }  // namespace cullide::raster::detail
