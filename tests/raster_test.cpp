@@ -1232,7 +1232,8 @@ TEST(Differential, DirectPathEqualsScalarReferenceAndTiles) {
             expectSame(expected, tiles, what + " tiles");
         }
     }
-    // A range drawn twice: the tiles, also on one thread; two threads never go direct.
+    // A range drawn twice: the tiles, also on one thread; two threads go direct for small triangles
+    // only (this scene's are mostly larger).
     const RandomScene s = randomScene(9, 40, 30, 50, 0);
     CommandList twice;
     twice.clear();
@@ -1259,9 +1260,12 @@ TEST(Differential, DirectPathEqualsScalarReferenceAndTiles) {
 // collinear in window coordinates but not after snapping has no plane from its vertices
 // (planeFrom's fallback, set up by the scalar step): a small form made from the lane's registers
 // anyway would carry a NaN or wrong plane, and one left unmade would rasterize a record never
-// written. ~1 px triangles, a third of them collinear (their window coordinates are the positions:
-// a 16 x 16 view of [0, 16]^2), in every lane of the batches of four; every format, both fill
-// rules; against the scalar path.
+// written. With several threads such lists take the direct path too, their blocks set up in
+// parallel a batch at a time (64 blocks of 128 triangles on two threads) and rasterized in order:
+// a block rasterized before it is set up, or out of order, or a draw split wrongly between
+// batches would differ. ~1 px triangles, a third of them collinear (their window coordinates are
+// the positions: a 16 x 16 view of [0, 16]^2), in every lane of the batches of four; one scene
+// long enough for several batches; every format, both fill rules; against the scalar path.
 TEST(Differential, DirectPathSmallTrianglesWithoutAVertexPlane) {
     const DepthFormat formats[] = {DepthFormat::unorm(16), DepthFormat::unorm(24), DepthFormat::float32()};
     for (uint64_t seed = 0; seed < 6; ++seed) {
@@ -1269,7 +1273,8 @@ TEST(Differential, DirectPathSmallTrianglesWithoutAVertexPlane) {
         auto ticks = [&](int n) { return float(int(rng() % uint64_t(n))) / 1024.0f; };  // exact in float
         RandomScene s;
         RandomScene collinearOnly;
-        for (int t = 0; t < 1200; ++t) {
+        const int triangles = seed == 0 ? 20000 : 1200;
+        for (int t = 0; t < triangles; ++t) {
             const float x = float(1 + rng() % 13) + ticks(1024), y = float(1 + rng() % 13) + ticks(1024);
             const float z = 0.1f + 0.8f * ticks(1024);
             if (rng() % 3 == 0) {  // p0, p0 + d, p0 + 2d: det = d.x * 2d.y - 2d.x * d.y = 0 exactly
@@ -1285,7 +1290,9 @@ TEST(Differential, DirectPathSmallTrianglesWithoutAVertexPlane) {
         const uint32_t n = uint32_t(s.geo.triangles.size()), nc = uint32_t(collinearOnly.geo.triangles.size());
         s.list.clear();
         s.list.beginQuery(QueryKind::SamplesPassed);
-        s.list.draw(0, n);
+        s.list.draw(0, n / 3);  // two draws, the second under another function
+        s.list.depthFunc(DepthFunc::LEqual);
+        s.list.draw(n / 3, n - n / 3);
         s.list.endQuery();
         collinearOnly.list.clear();
         collinearOnly.list.draw(0, nc);
@@ -1297,16 +1304,19 @@ TEST(Differential, DirectPathSmallTrianglesWithoutAVertexPlane) {
         // The trap is armed: collinear triangles that snap to a non-zero area and cover a centre.
         EXPECT_GT(run(collinearOnly, view, ref).stats.fragments, 10u) << "seed " << seed;
         const Outcome expected = run(s, view, ref);
-        CpuBackendOptions o = ref;
-        o.scalarReference = false;
-        o.threads = 1;
-        auto direct = backendFor(s.geo, view, o);
-        Outcome got;
-        got.results = direct->execute(s.list);
-        got.stats = direct->lastStats();
-        got.depth = direct->readDepth();
-        EXPECT_TRUE(direct->lastRanDirect());
-        expectSame(expected, got, "seed " + std::to_string(seed) + " " + view.depth.name());
+        for (int threads : {1, 2}) {
+            CpuBackendOptions o = ref;
+            o.scalarReference = false;
+            o.threads = threads;
+            auto direct = backendFor(s.geo, view, o);
+            Outcome got;
+            got.results = direct->execute(s.list);
+            got.stats = direct->lastStats();
+            got.depth = direct->readDepth();
+            EXPECT_TRUE(direct->lastRanDirect());
+            expectSame(expected, got,
+                       "seed " + std::to_string(seed) + " threads " + std::to_string(threads) + " " + view.depth.name());
+        }
     }
 }
 

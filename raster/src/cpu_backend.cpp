@@ -421,12 +421,16 @@ private:
     // draws every triangle through the tiles also captures its fragments for later lists under
     // this view (view_cache.h).
     std::vector<uint64_t> executeFast(const CommandList& list) {
-        // One thread: a list that draws each range once goes straight through (direct_path.h),
-        // not captured (a capture of such a list rasterizes every tile again: view_cache.h).
-        directRan_ = options_.direct && arena_.max_concurrency() == 1 && detail::directEligible(list);
+        // A list that draws each range once goes straight through (direct_path.h) on one thread,
+        // and on several when its triangles are small; not captured (a capture of such a list
+        // rasterizes every tile again: view_cache.h).
+        const int threads = arena_.max_concurrency();
+        directRan_ = options_.direct && detail::directEligible(list) &&
+            (threads == 1 || detail::smallTriangles(list, triangles_, snapped_.data(), params_.subpixelBits));
         if (directRan_) {
             const detail::SetupInput in{triangles_, window_, snapped_, params_, grid_, options_.simd};
-            return detail::executeDirect(list, in, rasterTable(), view_.depth, state_, depth_.data(), stats_);
+            return detail::executeDirect(list, in, rasterTable(), view_.depth, state_, depth_.data(), stats_, threads,
+                                         &direct_);
         }
         detail::StateWalker walk(state_, list.queryCount());
         setupRecords(list);
@@ -557,6 +561,7 @@ private:
     bool viewsFull_ = false;
     bool replayedView_ = false;  // by the last execute()
     bool directRan_ = false;  // the last execute() took the direct path
+    detail::DirectScratch direct_;
     // window_ and snapped_ hold the current view's numbers for every vertex (windowAll_), or for
     // those whose stamp is stamp_; windowValid_: sized, stamp_ this view's.
     bool windowValid_ = false, windowAll_ = false;
