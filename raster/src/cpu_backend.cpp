@@ -232,6 +232,7 @@ public:
         events_ = {};
         for (TileOut& out : tileOut_) std::vector<detail::QueryCount>().swap(out.queries);  // one per tile: kept
         frags_.clear();
+        direct_ = {};
         conservative_ = {};
         dropViews();
     }

@@ -1,6 +1,6 @@
-// The direct path of the CPU backend: a command list run in order on one thread, each triangle set
-// up and rasterized over the whole viewport as it comes, with no records, bins or tiles. Private
-// to raster/.
+// The direct path of the CPU backend: a command list run in order, each triangle set up and
+// rasterized over the whole viewport as it comes, with no records, bins or tiles. Private to
+// raster/.
 //
 // With one thread the tiles buy no parallelism; what they cost is every record written (96
 // bytes a triangle), binned, and read back scattered through memory, tile by tile. Here a block
@@ -11,6 +11,12 @@
 // depth buffer, query results and statistics bit for bit. It re-rasterizes a range drawn again
 // where the tiles replay it (frag_cache.h), so the backend takes it only for lists that draw
 // every range once (directEligible).
+//
+// A record whose pixel box is at most 2 x 2 (most, for triangles of about a pixel) is not
+// rasterized by the pixel loop: the four-wide setup computes its fragments and depth codes from
+// its lanes (SmallFrags) and writes no record, and runRecords only tests and writes them in order,
+// without a branch on their outcome. On several threads blocks are set up in parallel and
+// rasterized by the calling thread, for lists of small triangles (smallTriangles).
 #pragma once
 
 #include "command_state.h"

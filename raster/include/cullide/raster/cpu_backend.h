@@ -13,8 +13,9 @@
 //     only its triangles binned to the tile (found by binary search in the tile's sorted list).
 //     Per-tile query counts are kept as sparse (query, count) lists and summed at the end.
 //     Nothing depends on scheduling, so results are identical for any thread count. On one
-//     thread, a list that draws each range once skips the tiles (`direct`): each triangle is set
-//     up and rasterized over the whole viewport as it comes, with the same setup and pixel loops.
+//     thread, or for small triangles, a list that draws each range once skips the tiles
+//     (`direct`): each triangle is set up and rasterized over the whole viewport as it comes, with
+//     the same setup and pixel loops.
 //   - scalar reference (`scalarReference = true`): one thread, commands in order, each triangle
 //     tested at every pixel centre of the viewport with edge functions evaluated from scratch.
 //     Slow (O(pixels) per triangle) and obviously correct; used by the differential tests.
@@ -41,9 +42,11 @@ struct CpuBackendOptions {
     bool scalarReference = false;  // use the scalar reference path instead
     bool simd = true;  // fast path: AVX2 pixel loop and triangle setup where the CPU has it
                        // (the same results bit for bit; false: scalar)
-    // Fast path on one thread: run a list that draws each range once straight through, each
-    // triangle set up and rasterized over the whole viewport in command order, without records,
-    // bins or tiles (the same results bit for bit; raster/src/direct_path.h). false: always tiles.
+    // Fast path: run a list that draws each range once straight through, each triangle set up and
+    // rasterized over the whole viewport in command order, without records, bins or tiles (the
+    // same results bit for bit; raster/src/direct_path.h). On one thread always; on several when
+    // most of its triangles are under two pixels wide (blocks set up in parallel, rasterized in
+    // order by the calling thread). false: always tiles.
     bool direct = true;
     // Fast path: memory for the fragments of the whole geometry under the views of lists that drew
     // every triangle (8 bytes per fragment, ~2.1 MB per 500 x 500 view), so that later lists
@@ -95,7 +98,7 @@ public:
     // Whether the most recent execute() took the direct path (CpuBackendOptions::direct).
     virtual bool lastRanDirect() const = 0;
     // Frees the scratch kept across lists (triangle records, bins, events, fragment caches, window
-    // coordinates), keeping geometry, view and buffers; the next execute() allocates it again.
+    // coordinates, the direct path's blocks), keeping geometry, view and buffers; the next execute() allocates it again.
     // For a caller that runs something else large between lists (trace recording).
     virtual void releaseScratch() = 0;
     // borrowGeometry (DepthBackend) reads the arrays in place and returns true; releaseScratch
