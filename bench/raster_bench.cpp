@@ -4,9 +4,10 @@
 //     legs of `leg` pixels (bounding box leg x leg, area leg^2/2; leg 1.5 ~ a 1-pixel triangle),
 //     one command list: clear, LESS, draw all. One thread takes the direct path (direct:1,
 //     CpuBackendOptions::direct) unless told not to (direct:0, the tiles); two threads take it
-//     for the small triangles of leg 1 (blocks set up in parallel), the tiles otherwise. Counters: Mtri/s and Mfrag/s (covered centres); on leg 1, 500 px, 1 thread (issue
-//     16's row) x_90b80f8 (rate over commit 90b80f8's), x_tiles (rate over the tiles on one
-//     thread, timed in this run just before) and the goal of 30 M triangles/s.
+//     for the small triangles of leg 1 (blocks set up in parallel), the tiles otherwise.
+//     Counters: Mtri/s and Mfrag/s (covered centres); on leg 1, 500 px, 1 thread (issue 16's
+//     row) x_90b80f8 (rate over commit 90b80f8's), x_tiles (rate over the tiles on one thread,
+//     timed in this run just before) and the goal of 30 M triangles/s.
 //   BM_ReducePcs/<mesh>/<triangles per object>/<threads>: one self-variant reducePCS (the seed
 //     paper's Figure 3) in one view direction (+z), as ONE command list: forward pass
 //     (clear; per object: mask on, LESS, draw; mask off, GREATER, query, draw) and reverse pass
@@ -96,7 +97,8 @@ void BM_Triangles(benchmark::State& state) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / double(state.iterations());
     // One thread takes the direct path when allowed; several take it for small triangles only
     // (leg 1 here).
-    if (backend->lastRanDirect() != (o.direct && (o.threads == 1 || leg < 2))) state.SkipWithError("not the path expected");
+    if (backend->lastRanDirect() != (o.direct && (o.threads == 1 || leg < 2)))
+        state.SkipWithError("not the path expected");
     state.counters["Mtri/s"] = benchmark::Counter(double(count) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
     state.counters["Mfrag/s"] =
         benchmark::Counter(double(backend->lastStats().fragments) / 1e6, benchmark::Counter::kIsIterationInvariantRate);

@@ -1314,8 +1314,9 @@ TEST(Differential, DirectPathSmallTrianglesWithoutAVertexPlane) {
             got.stats = direct->lastStats();
             got.depth = direct->readDepth();
             EXPECT_TRUE(direct->lastRanDirect());
-            expectSame(expected, got,
-                       "seed " + std::to_string(seed) + " threads " + std::to_string(threads) + " " + view.depth.name());
+            expectSame(
+                expected, got,
+                "seed " + std::to_string(seed) + " threads " + std::to_string(threads) + " " + view.depth.name());
         }
     }
 }

@@ -61,8 +61,14 @@ struct Direct {
     bool isFloat, batched;
 
     Direct(const SetupInput& input, const RasterTable& t, const DepthFormat& format)
-        : in(input), params(input.params), table(t), width(params.width), height(params.height), bits(format.bits),
-          isFloat(format.kind == DepthFormat::Kind::Float32), batched(input.simd && haveSetupAvx2()) {
+        : in(input),
+          params(input.params),
+          table(t),
+          width(params.width),
+          height(params.height),
+          bits(format.bits),
+          isFloat(format.kind == DepthFormat::Kind::Float32),
+          batched(input.simd && haveSetupAvx2()) {
         params.dropEmpty = true;  // as setupDrawn
     }
 
@@ -106,7 +112,8 @@ struct Direct {
         const uint32_t scalarFrom = k;
         for (; k < n; ++k)
             setupInsideLane(b.batch[k / 4], int(k % 4), g.window.data(), g.snapped.data(), params, b.recs[k]);
-        if (table.prepare) table.prepare(b.recs + scalarFrom, n - scalarFrom, size_t(width), bits, b.small + scalarFrom);
+        if (table.prepare)
+            table.prepare(b.recs + scalarFrom, n - scalarFrom, size_t(width), bits, b.small + scalarFrom);
     }
 
     // Rasterizes a prepared block into `depth` in triangle order: the records between the clipped
@@ -218,11 +225,12 @@ std::vector<uint64_t> executeDirect(const CommandList& list, const SetupInput& i
             if (n == 1) {
                 d.prepareBlock(blocks[0]);
             } else {
-                tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 1),
-                                  [&](const tbb::blocked_range<uint32_t>& r) {
-                                      for (uint32_t k = r.begin(); k != r.end(); ++k) d.prepareBlock(blocks[k]);
-                                  },
-                                  tbb::simple_partitioner());
+                tbb::parallel_for(
+                    tbb::blocked_range<uint32_t>(0, n, 1),
+                    [&](const tbb::blocked_range<uint32_t>& r) {
+                        for (uint32_t k = r.begin(); k != r.end(); ++k) d.prepareBlock(blocks[k]);
+                    },
+                    tbb::simple_partitioner());
             }
             for (uint32_t k = 0; k < n; ++k) walk.draw(c, &blocks[k], blocks[k].lo == c.first, blocks[k].hi == end);
         }

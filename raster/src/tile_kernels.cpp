@@ -236,8 +236,8 @@ __attribute__((target("avx2"))) void prepareSmallAvx2(const EdgeTri* recs, uint3
         const DepthPlane& p = t.plane;
         const __m256d cx = _mm256_setr_pd(x0 + 0.5, x0 + 1.5, x0 + 0.5, x0 + 1.5);
         const __m256d cy = _mm256_setr_pd(y0 + 0.5, y0 + 0.5, y0 + 1.5, y0 + 1.5);
-        const __m256d row =
-            _mm256_add_pd(_mm256_set1_pd(p.z0), _mm256_mul_pd(_mm256_set1_pd(p.dzdy), _mm256_sub_pd(cy, _mm256_set1_pd(p.y0))));
+        const __m256d row = _mm256_add_pd(
+            _mm256_set1_pd(p.z0), _mm256_mul_pd(_mm256_set1_pd(p.dzdy), _mm256_sub_pd(cy, _mm256_set1_pd(p.y0))));
         const __m256d z =
             _mm256_add_pd(row, _mm256_mul_pd(_mm256_set1_pd(p.dzdx), _mm256_sub_pd(cx, _mm256_set1_pd(p.x0))));
         f.pixel = uint32_t(size_t(y0) * stride + size_t(x0));

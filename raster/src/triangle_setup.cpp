@@ -299,9 +299,9 @@ __attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s,
 // these registers' (the others were set up by the scalar step). Returns the lanes given a form (the
 // others get kNotSmall).
 __attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i j0, __m128i j1, const __m256i a[3],
-                                                 const __m256i b[3], const __m256i c[3], __m256d x0, __m256d y0,
-                                                 __m256d z0, __m256d dzdx, __m256d dzdy, int planeOk,
-                                                 const SmallOut& small) {
+                                                const __m256i b[3], const __m256i c[3], __m256d x0, __m256d y0,
+                                                __m256d z0, __m256d dzdx, __m256d dzdy, int planeOk,
+                                                const SmallOut& small) {
     const __m128i one = _mm_set1_epi32(1), two = _mm_set1_epi32(2);
     const __m128i w = _mm_sub_epi32(i1, i0), h = _mm_sub_epi32(j1, j0);  // >= 0: the box holds a centre
     const int fits = _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(_mm_cmpgt_epi32(two, w), _mm_cmpgt_epi32(two, h))));
@@ -321,14 +321,16 @@ __attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i 
         const __m256i i64 = _mm256_cvtepi32_epi64(i), j64 = _mm256_cvtepi32_epi64(j);
         __m256i any = _mm256_setzero_si256();
         for (int k = 0; k < 3; ++k)
-            any = _mm256_or_si256(any, _mm256_add_epi64(_mm256_add_epi64(c[k], _mm256_mul_epi32(a[k], i64)),
-                                                        _mm256_mul_epi32(b[k], j64)));
+            any = _mm256_or_si256(
+                any,
+                _mm256_add_epi64(_mm256_add_epi64(c[k], _mm256_mul_epi32(a[k], i64)), _mm256_mul_epi32(b[k], j64)));
         inside[p] = ~_mm256_movemask_pd(_mm256_castsi256_pd(any)) & valid[p];
         const __m256d half = _mm256_set1_pd(0.5);
         const __m256d cx = _mm256_add_pd(_mm256_cvtepi32_pd(i), half), cy = _mm256_add_pd(_mm256_cvtepi32_pd(j), half);
-        const __m256d z =
-            _mm256_add_pd(_mm256_add_pd(z0, _mm256_mul_pd(dzdy, _mm256_sub_pd(cy, y0))), _mm256_mul_pd(dzdx, _mm256_sub_pd(cx, x0)));
-        codes[p] = _mm_castsi128_ps(small.isFloat ? clampEncode4<true>(z, small.bits) : clampEncode4<false>(z, small.bits));
+        const __m256d z = _mm256_add_pd(_mm256_add_pd(z0, _mm256_mul_pd(dzdy, _mm256_sub_pd(cy, y0))),
+                                        _mm256_mul_pd(dzdx, _mm256_sub_pd(cx, x0)));
+        codes[p] =
+            _mm_castsi128_ps(small.isFloat ? clampEncode4<true>(z, small.bits) : clampEncode4<false>(z, small.bits));
     }
     _MM_TRANSPOSE4_PS(codes[0], codes[1], codes[2], codes[3]);  // now per lane: its four pixels
     alignas(16) int32_t ci[4], cj[4];
@@ -460,8 +462,8 @@ bool haveSetupAvx2() {
     return false;
 }
 
-void setupInsideEdgeTri4(const InsideBatch&, const WinVertex*, const SnapVertex*, const SetupParams&,
-                         EdgeTri* const[4], const SmallOut*) {
+void setupInsideEdgeTri4(const InsideBatch&, const WinVertex*, const SnapVertex*, const SetupParams&, EdgeTri* const[4],
+                         const SmallOut*) {
     CULLIDE_CHECK(false, "setupInsideEdgeTri4 without AVX2");
 }
 
