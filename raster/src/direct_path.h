@@ -59,8 +59,8 @@ struct DirectScratch {
 // Whether most of the triangles `list` draws are small: of about 64 spread over them, three in four
 // or more have snapped vertices inside the clip volume less than two pixels apart on each axis.
 // With several threads the direct path is taken for such lists only: its blocks are set up in
-// parallel but rasterized by one thread at a time, which for larger triangles is slower than the
-// tiles.
+// parallel but rasterized by one thread, which for larger triangles (rasterizing most of the
+// work) would leave the other threads idle where the tiles rasterize in parallel.
 bool smallTriangles(const CommandList& list, std::span<const Triangle> triangles, const SnapVertex* snapped,
                     int subpixelBits);
 
