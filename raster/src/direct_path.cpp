@@ -1,9 +1,7 @@
 // The direct path of the CPU backend (direct_path.h).
 #include "direct_path.h"
 
-#include <oneapi/tbb/blocked_range.h>
-#include <oneapi/tbb/parallel_for.h>
-#include <oneapi/tbb/partitioner.h>
+#include "cullide/parallel.h"
 
 #include <algorithm>
 
@@ -99,21 +97,19 @@ struct Direct {
         b.clips = clips;
         b.rejected = rejected;
         b.zeroArea = zeroArea;
-        // With the pixel loops' preparation (AVX2), the four-wide setup makes the small forms
-        // too; the scalar step's records are prepared from the records.
+        // The four-wide setup makes the small forms too; the scalar step's records (at most three
+        // a block without AVX2's setup, all of them without) keep the pixel loop.
         uint32_t k = 0;
         if (batched)
             for (; k + 4 <= n; k += 4) {
                 EdgeTri* const out[4] = {&b.recs[k], &b.recs[k + 1], &b.recs[k + 2], &b.recs[k + 3]};
                 const SmallOut forms{b.small + k, size_t(width), bits, isFloat};
-                setupInsideEdgeTri4(b.batch[k / 4], g.window.data(), g.snapped.data(), params, out,
-                                    table.prepare ? &forms : nullptr);
+                setupInsideEdgeTri4(b.batch[k / 4], g.window.data(), g.snapped.data(), params, out, &forms);
             }
-        const uint32_t scalarFrom = k;
-        for (; k < n; ++k)
+        for (; k < n; ++k) {
             setupInsideLane(b.batch[k / 4], int(k % 4), g.window.data(), g.snapped.data(), params, b.recs[k]);
-        if (table.prepare)
-            table.prepare(b.recs + scalarFrom, n - scalarFrom, size_t(width), bits, b.small + scalarFrom);
+            b.small[k].lanes = kNotSmall;
+        }
     }
 
     // Rasterizes a prepared block into `depth` in triangle order: the records between the clipped
@@ -222,16 +218,8 @@ std::vector<uint64_t> executeDirect(const CommandList& list, const SetupInput& i
                 blocks[n].lo = lo;
                 blocks[n].hi = std::min(end, lo + kBlock);
             }
-            if (n == 1) {
-                d.prepareBlock(blocks[0]);
-            } else {
-                tbb::parallel_for(
-                    tbb::blocked_range<uint32_t>(0, n, 1),
-                    [&](const tbb::blocked_range<uint32_t>& r) {
-                        for (uint32_t k = r.begin(); k != r.end(); ++k) d.prepareBlock(blocks[k]);
-                    },
-                    tbb::simple_partitioner());
-            }
+            if (n == 1) d.prepareBlock(blocks[0]);
+            else parallelForEach(0, n, [&](size_t k) { d.prepareBlock(blocks[k]); });
             for (uint32_t k = 0; k < n; ++k) walk.draw(c, &blocks[k], blocks[k].lo == c.first, blocks[k].hi == end);
         }
     }

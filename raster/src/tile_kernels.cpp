@@ -213,39 +213,6 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     passed += pass;
 }
 
-// The direct path's small records (SmallFrags): rasterizeNarrowAvx2's one iteration on a record
-// at most 2 x 2 pixels, without the depth buffer: the same edge functions and depth operations
-// per pixel, so the same fragments and codes.
-template <bool Float>
-__attribute__((target("avx2"))) void prepareSmallAvx2(const EdgeTri* recs, uint32_t n, size_t stride, int bits,
-                                                      SmallFrags* out) {
-    for (uint32_t k = 0; k < n; ++k) {
-        const EdgeTri& t = recs[k];
-        SmallFrags& f = out[k];
-        const int x0 = t.x0, y0 = t.y0, w = t.x1 - x0, h = t.y1 - y0;
-        if ((w | h) > 1) {
-            f.lanes = kNotSmall;
-            continue;
-        }
-        __m256i any = _mm256_setzero_si256();
-        for (int e = 0; e < 3; ++e) {
-            const int64_t a = t.a[e], b = t.b[e], base = a * x0 + b * y0 + t.c[e];
-            any = _mm256_or_si256(any, _mm256_add_epi64(_mm256_set1_epi64x(base), _mm256_setr_epi64x(0, a, b, a + b)));
-        }
-        const int valid = 1 | w << 1 | h << 2 | (w & h) << 3;
-        const DepthPlane& p = t.plane;
-        const __m256d cx = _mm256_setr_pd(x0 + 0.5, x0 + 1.5, x0 + 0.5, x0 + 1.5);
-        const __m256d cy = _mm256_setr_pd(y0 + 0.5, y0 + 0.5, y0 + 1.5, y0 + 1.5);
-        const __m256d row = _mm256_add_pd(
-            _mm256_set1_pd(p.z0), _mm256_mul_pd(_mm256_set1_pd(p.dzdy), _mm256_sub_pd(cy, _mm256_set1_pd(p.y0))));
-        const __m256d z =
-            _mm256_add_pd(row, _mm256_mul_pd(_mm256_set1_pd(p.dzdx), _mm256_sub_pd(cx, _mm256_set1_pd(p.x0))));
-        f.pixel = uint32_t(size_t(y0) * stride + size_t(x0));
-        f.lanes = uint32_t(~_mm256_movemask_pd(_mm256_castsi256_pd(any)) & valid);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(f.z), clampEncode4<Float>(z, bits));
-    }
-}
-
 // The direct path's run of records (RunRecordsFn): a small record's tests and writes as
 // rasterizeNarrowAvx2's, with no branch on its fragments or outcomes.
 template <DepthFunc F>
@@ -369,8 +336,7 @@ constexpr RasterTable makeTable(std::index_sequence<F...>) {
     return {std::array<RasterFn, 8>{K<DepthFunc(F), Float, false>::run...},
             std::array<RasterFn, 8>{K<DepthFunc(F), Float, true>::run...},
             std::array<ReplayFn, 8>{K<DepthFunc(F), Float, false>::replay...},
-            std::array<RunRecordsFn, 8>{K<DepthFunc(F), Float, false>::runRecords...},
-            K<DepthFunc::Less, Float, false>::prepare};
+            std::array<RunRecordsFn, 8>{K<DepthFunc(F), Float, false>::runRecords...}};
 }
 
 template <DepthFunc F, bool Float, bool Record>
@@ -378,7 +344,6 @@ struct ScalarKernel {
     static constexpr RasterFn run = &rasterizeInTile<F, Float, Record>;
     static constexpr ReplayFn replay = &replayFragments<F>;
     static constexpr RunRecordsFn runRecords = &runRecordsScalar;
-    static constexpr PrepareFn prepare = nullptr;
 };
 
 #ifdef CULLIDE_RASTER_AVX2
@@ -387,7 +352,6 @@ struct Avx2Kernel {
     static constexpr RasterFn run = &rasterizeInTileAvx2<F, Float, Record>;
     static constexpr ReplayFn replay = &replayFragmentsAvx2<F>;
     static constexpr RunRecordsFn runRecords = &runRecordsAvx2<F>;
-    static constexpr PrepareFn prepare = &prepareSmallAvx2<Float>;
 };
 #endif
 

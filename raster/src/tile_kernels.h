@@ -18,24 +18,21 @@ using RasterFn = void (*)(const EdgeTri&, int, int, int, int, uint32_t*, size_t,
                           FragGroup*&);
 using ReplayFn = void (*)(const FragGroup*, const FragGroup*, uint32_t*, bool, uint64_t&, uint64_t&);
 
-// prepare(records, n, stride, bits, out): out[k] for records[k], k < n.
-using PrepareFn = void (*)(const EdgeTri*, uint32_t, size_t, int, SmallFrags*);
 // runRecords(records, small, n, raster, width, height, depth, stride, mask, bits, fragments,
-// passed): records [0, n) in order over the whole viewport, the small ones from `small`
-// (prepared), the others through `raster` (the same depth function's pixel loop); the same
-// fragments, tests and writes as the pixel loop on every record.
+// passed): records [0, n) in order over the whole viewport, those with a small form
+// (SmallFrags, from setupInsideEdgeTri4) from it, the others through `raster` (the same depth
+// function's pixel loop); the same fragments, tests and writes as the pixel loop on every record.
+// The scalar loops' form reads no small forms.
 using RunRecordsFn = void (*)(const EdgeTri*, const SmallFrags*, uint32_t, RasterFn, int, int, uint32_t*, size_t, bool,
                               int, uint64_t&, uint64_t&);
 
 // The pixel loops for one CPU and depth format, indexed by DepthFunc: rasterizing (raster),
 // rasterizing and recording (record), replaying (replay), the direct path's runs of records
-// (runRecords); and the direct path's preparation of small records (null: none, runRecords
-// rasterizes every record).
+// (runRecords).
 struct RasterTable {
     std::array<RasterFn, 8> raster, record;
     std::array<ReplayFn, 8> replay;
     std::array<RunRecordsFn, 8> runRecords;
-    PrepareFn prepare = nullptr;
 };
 
 // The hot loops for this CPU: AVX2 when asked for and present, else the scalar loops.
