@@ -298,8 +298,8 @@ __attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s,
 // operations in its order, so the same fragments and codes. `planeOk`: the lanes whose plane is
 // these registers' (the others were set up by the scalar step). Returns the lanes given a form (the
 // others get kNotSmall).
-__attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i j0, __m128i j1, const __m256i a[3],
-                                                const __m256i b[3], const __m256i c[3], __m256d x0, __m256d y0,
+__attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i j0, __m128i j1, const int32_t ea[3][4],
+                                                const int32_t eb[3][4], const __m256i c[3], __m256d x0, __m256d y0,
                                                 __m256d z0, __m256d dzdx, __m256d dzdy, int planeOk,
                                                 const SmallOut& small) {
     const __m128i one = _mm_set1_epi32(1), two = _mm_set1_epi32(2);
@@ -314,6 +314,11 @@ __attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i 
     const int wide = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(w, one)));
     const int tall = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(h, one)));
     const int valid[4] = {15, wide, tall, wide & tall};  // per pixel, the lanes whose box holds it
+    __m256i a[3], b[3];  // the edge coefficients in 64-bit lanes
+    for (int k = 0; k < 3; ++k) {
+        a[k] = _mm256_cvtepi32_epi64(_mm_load_si128(reinterpret_cast<const __m128i*>(ea[k])));
+        b[k] = _mm256_cvtepi32_epi64(_mm_load_si128(reinterpret_cast<const __m128i*>(eb[k])));
+    }
     __m128 codes[4];
     int inside[4];
     for (int p = 0; p < 4; ++p) {
@@ -396,7 +401,7 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
     const bool bottomLeft = params.fillRule == FillRule::BottomLeft;
     alignas(16) int32_t ea[3][4], eb[3][4];
     alignas(32) int64_t ec[3][4];
-    __m256i a64[3], b64[3], c64[3];  // for the small forms
+    __m256i c64[3];  // for the small forms
     for (int k = 0; k < 3; ++k) {
         const int n = k == 2 ? 0 : k + 1;
         const __m128i dx = _mm_sub_epi32(x[n], x[k]), dy = _mm_sub_epi32(y[n], y[k]);
@@ -409,8 +414,6 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
         const __m256i c = _mm256_sub_epi64(_mm256_sub_epi64(p, q), _mm256_cvtepi32_epi64(exclusive));
         _mm_store_si128(reinterpret_cast<__m128i*>(ea[k]), _mm_sub_epi32(zero, dy));
         _mm_store_si128(reinterpret_cast<__m128i*>(eb[k]), dx);
-        a64[k] = _mm256_cvtepi32_epi64(_mm_sub_epi32(zero, dy));
-        b64[k] = _mm256_cvtepi32_epi64(dx);
         c64[k] = floorShift4(c, s, rest);
         _mm256_store_si256(reinterpret_cast<__m256i*>(ec[k]), c64[k]);
     }
@@ -431,7 +434,7 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
                                      _mm256_and_pd(finiteX, finiteY));
     const int planeOk = _mm256_movemask_pd(ok);
     // The lanes with a small form need no record (the direct path reads only the others').
-    const int formed = small ? smallForms4(i0, i1, j0, j1, a64, b64, c64, x0, y0, z0, dzdx, dzdy, planeOk, *small) : 0;
+    const int formed = small ? smallForms4(i0, i1, j0, j1, ea, eb, c64, x0, y0, z0, dzdx, dzdy, planeOk, *small) : 0;
     alignas(32) double gx[4], gy[4];
     _mm256_store_pd(gx, dzdx);
     _mm256_store_pd(gy, dzdy);
