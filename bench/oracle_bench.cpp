@@ -20,8 +20,11 @@
 //     of CGAL sequential per iteration (40), so that both are timed in the same minutes of a
 //     machine whose speed drifts (BM_Oracle's vs_cgal divides two runs taken a second apart, and
 //     moves with it). Each call starts with caches the other call left, as a user's single call
-//     does, and with whatever memory malloc kept: workspace 1 passes one oracle::Workspace to
-//     every call of ours, as a caller that runs the oracle per frame does; 0, none.
+//     does. workspace 1 passes one oracle::Workspace to every call of ours, as a caller that runs
+//     the oracle per frame does; 0, none: our call's arrays come from its PageArena (huge pages,
+//     with the chunks the previous call pooled) or malloc, with whatever memory each kept;
+//     2, none and cold: before each call of ours the pool is released and malloc_trim(0) gives
+//     malloc's free memory back, so every page is fresh, as in a process's first call.
 //     Counters: ours_ms, cgal_ms (the fastest call of each), vs_cgal_best (their ratio),
 //     vs_cgal_median (the median of the per-iteration ratios); ours' phases as in BM_Oracle
 //     (means).
@@ -29,11 +32,14 @@
 #include "cullide/mesh_io.h"
 #include "cullide/oracle/cgal_reference.h"
 #include "cullide/oracle/oracle.h"
+#include "cullide/unwritten.h"
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
 #include <Eigen/Geometry>
+
+#include <malloc.h>
 
 #include <algorithm>
 #include <chrono>
@@ -199,7 +205,8 @@ BENCHMARK(BM_Oracle)
 void BM_OracleInterleaved(benchmark::State& state) {
     const int which = int(state.range(0));
     oracle::Workspace workspace;  // used with workspace:1 (oracle::Workspace)
-    oracle::Workspace* const reuse = state.range(1) != 0 ? &workspace : nullptr;
+    oracle::Workspace* const reuse = state.range(1) == 1 ? &workspace : nullptr;
+    const bool cold = state.range(1) == 2;
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
     const Mesh& mesh = benchMesh(which);
     const Scene scene = sceneOf(mesh);
@@ -207,6 +214,10 @@ void BM_OracleInterleaved(benchmark::State& state) {
     std::vector<double> ours, theirs, ratio;
     double phase[3] = {0, 0, 0};
     for (auto _ : state) {
+        if (cold) {
+            PageArena::releasePool();
+            malloc_trim(0);
+        }
         const auto t0 = std::chrono::steady_clock::now();
         const oracle::Truth t = oracle::findIntersections(scene, {}, reuse);
         benchmark::DoNotOptimize(t.pairs.data());
@@ -231,7 +242,7 @@ void BM_OracleInterleaved(benchmark::State& state) {
 }
 BENCHMARK(BM_OracleInterleaved)
     ->ArgNames({"mesh", "workspace"})
-    ->ArgsProduct({{3, 4, 5, 6, 7}, {0, 1}})
+    ->ArgsProduct({{3, 4, 5, 6, 7}, {0, 1, 2}})
     ->Iterations(40)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();

@@ -505,5 +505,54 @@ TEST(Oracle, WorkspaceReuseGivesTheSameTruth) {
     }
 }
 
+// Trap: without a Workspace a call takes its arrays from its own PageArena, handed out in order
+// from shared 2 MiB chunks; one that overlaps another (the chunk's position not advanced, a
+// freed array's space taken back while a later one still lives there, the alignment of the
+// 64-byte records lost), or one freed through the wrong allocator, gives other pairs or counts
+// than malloc's arrays (or a crash). Each call with the arena forced on and off: one object and
+// several (arrays freed in the middle: world positions, the kept triangles), the exact stage,
+// welding, the Morton order's keys (spatialOrderMin lowered), Embree's broad phase.
+TEST(Oracle, CallArenaGivesTheSameTruth) {
+    const Mesh cow = bundled("cow.off");
+    const Mesh subdivided = CULLIDE_SANITIZED ? cow : subdivide(cow);
+    Scene two = sceneOf({cow, subdivided, cow});
+    two.objects[1].transform.translate(Vec3f(0.25f, 0.02f, 0.05f));
+    two.objects[2].transform.translate(Vec3f(-0.2f, 0.05f, 0.0f));
+    std::vector<TriangleRef> pcs;
+    for (uint32_t o = 0; o < 3; ++o)
+        for (uint32_t t = 0; t < uint32_t(two.objects[o].mesh.triangleCount()); t += 1 + o) pcs.push_back({o, t});
+    OracleOptions weld;
+    weld.weldByPosition = true;
+    OracleOptions embree;
+    embree.broadPhase = BroadPhase::Embree;
+    const std::vector<std::function<Truth()>> calls = {
+        [&] { return findIntersections(sceneOf({subdivided})); },
+        [&] { return findIntersections(two); },
+        [&] { return exactStage(two, pcs); },
+        [&] { return findIntersections(two, weld); },
+        [&] { return findIntersections(two, embree); },
+        [&] {
+            const size_t keep = detail::spatialOrderMin;
+            detail::spatialOrderMin = 0;
+            Truth t = findIntersections(two);
+            detail::spatialOrderMin = keep;
+            return t;
+        },
+    };
+    const detail::CallArena keep = detail::callArena;
+    for (size_t k = 0; k < calls.size(); ++k) {
+        detail::callArena = detail::CallArena::Never;
+        const Truth plain = calls[k]();
+        detail::callArena = detail::CallArena::Always;
+        const Truth arena = calls[k]();
+        EXPECT_FALSE(plain.pairs.empty()) << k;
+        EXPECT_EQ(arena.pairs, plain.pairs) << "call " << k;
+        EXPECT_EQ(arena.degenerate, plain.degenerate) << k;
+        EXPECT_EQ(arena.trianglesTested, plain.trianglesTested) << k;
+        EXPECT_EQ(arena.candidatePairs, plain.candidatePairs) << k;
+    }
+    detail::callArena = keep;
+}
+
 }  // namespace
 }  // namespace cullide::oracle

@@ -17,9 +17,10 @@ struct Box {
 
 // The oracle's large arrays are filled by parallel loops before they are read: they start
 // unwritten, so those loops touch their fresh pages first, not a serial memset, and from 2 MiB on
-// they ask for huge pages (cullide/unwritten.h).
+// they ask for huge pages (cullide/unwritten.h). A call without a Workspace takes them from its
+// own PageArena where one is available (fresh memory on huge pages, whatever malloc kept).
 template <typename T>
-using Buffer = UnwrittenVector<T>;
+using Buffer = ArenaVector<T>;
 
 // The float below / above x (std::nextafter toward -inf / +inf, which is a libm call per corner:
 // 1.5% of the oracle on small meshes), for finite x only: -0 and +0 both step to the smallest
@@ -62,11 +63,17 @@ uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits);
 // The grid's arrays. With `keep` (a caller's oracle::Workspace) they stay allocated for the next
 // call, which reuses them; without, each goes as soon as it is no longer needed (the peak of one
 // call counts more than the next call's page faults).
+// `arena`: where the arrays come from (null: malloc).
 struct GridScratch {
+    GridScratch() = default;
+    explicit GridScratch(PageArena* arena)
+        : extent(ArenaAllocator<float>(arena)), raw(ArenaAllocator<uint64_t>(arena)),
+          start(ArenaAllocator<uint32_t>(arena)), entries(ArenaAllocator<uint64_t>(arena)) {}
+
     bool keep = false;
     Buffer<float> extent;  // per box: its largest extent (the cell size's median)
-    std::vector<uint64_t> raw;  // the entries in box order, before the counting sort (few cells)
-    std::vector<uint32_t> start;  // per cell: its first entry (few cells)
+    Buffer<uint64_t> raw;  // the entries in box order, before the counting sort (few cells)
+    Buffer<uint32_t> start;  // per cell: its first entry (few cells)
     Buffer<uint64_t> entries;  // (cell, axes, box), sorted by cell
 };
 

@@ -243,10 +243,10 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         // entries generated once (a 6k mesh spent a sixth of its time generating them twice and
         // in the parallel passes' and the 256 buckets' fixed costs). The same order: cells
         // ascending, g ascending within a cell.
-        std::vector<uint64_t>& raw = scratch.raw;
+        Buffer<uint64_t>& raw = scratch.raw;
         raw.clear();
         raw.reserve(4 * n);
-        std::vector<uint32_t>& start = scratch.start;  // cell c's entries from start[c]
+        Buffer<uint32_t>& start = scratch.start;  // cell c's entries from start[c]
         start.assign(cellCount + 1, 0);
         for (size_t g = 0; g < n; ++g)
             if (!forEachEntry(g, [&](uint64_t entry) {
@@ -258,8 +258,8 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         entryBuffer.resize(raw.size());
         for (const uint64_t entry : raw) entryBuffer[start[entry >> 32]++] = entry;
         if (!scratch.keep) {
-            std::vector<uint64_t>().swap(raw);
-            std::vector<uint32_t>().swap(start);
+            Buffer<uint64_t>().swap(raw);  // the allocators swap too: each frees through its own
+            Buffer<uint32_t>().swap(start);
         }
     } else {
         std::vector<size_t> slots(boxBlocks * 256, 0);

@@ -40,6 +40,12 @@ Plane planeOf(const Prim& prim);
 // run both orders on the same mesh; 2^16 (oracle.cpp).
 extern size_t spatialOrderMin;
 
+// Whether a call without a Workspace takes its arrays from a PageArena of its own
+// (cullide/unwritten.h): where PageArena::available() (the default), never, or always (tests, so
+// that both paths run on any machine). A variable so that the tests can run each (oracle.cpp).
+enum class CallArena : uint8_t { WhereAvailable, Never, Always };
+extern CallArena callArena;
+
 // The narrow phase of one candidate pair (planeA = planeOf(a); storedB = &planeOf(b) where stored,
 // null to compute it here when needed) (faceContact's answer, exactly): by the shared vertex
 // ids, the exact signs of each triangle's corners against the other's plane (filter first, then

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -41,6 +42,11 @@ using detail::Prim;  // what the narrow phase reads of one primitive (narrow_pha
 using detail::Buffer;
 
 struct ObjectData {
+    ObjectData() = default;
+    explicit ObjectData(PageArena* arena)
+        : prims(ArenaAllocator<Prim>(arena)), boxes(ArenaAllocator<Box>(arena)),
+          planes(ArenaAllocator<detail::Plane>(arena)) {}
+
     Buffer<Prim> prims;  // Embree primitive order = ascending triangle index
     Buffer<Box> boxes;  // one per primitive
     Buffer<detail::Plane> planes;  // one per primitive on small scenes (kStoredPlanes), else empty
@@ -138,7 +144,7 @@ uint64_t spreadBits(uint64_t q) {
 // Sorts `kept` (triangle indices, ascending) by the Morton code of the triangles' first corner
 // on a 2^10 grid over the mesh's bounds, ties by index: neighbours in space become neighbours in
 // memory, which the narrow phase's random reads of primitive records need (cache misses).
-void spatialOrder(std::span<const Vec3f> positions, std::span<const Triangle> triangles, std::vector<uint32_t>& kept) {
+void spatialOrder(std::span<const Vec3f> positions, std::span<const Triangle> triangles, Buffer<uint32_t>& kept) {
     if (kept.size() < 2) return;
     const size_t n = kept.size();
     // Bounds per fixed block, combined in block order (min/max: the same for any thread count).
@@ -156,7 +162,7 @@ void spatialOrder(std::span<const Vec3f> positions, std::span<const Triangle> tr
     std::array<float, 6> b = blockBounds[0];
     for (const auto& bb : blockBounds)
         for (int k = 0; k < 3; ++k) b[k] = std::min(b[k], bb[k]), b[3 + k] = std::max(b[3 + k], bb[3 + k]);
-    Buffer<uint64_t> keys(n), tmp(n);
+    Buffer<uint64_t> keys(n, kept.get_allocator()), tmp(n, kept.get_allocator());
     parallelFor(0, n, 4096, [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
             const Vec3f& p = positions[triangles[kept[i]][0]];
@@ -177,8 +183,13 @@ void spatialOrder(std::span<const Vec3f> positions, std::span<const Triangle> tr
 
 }  // namespace
 
-// What a Workspace keeps: per object its arrays, the world positions, the grid's arrays.
+// What a Workspace keeps: per object its arrays, the world positions, the grid's arrays. A call
+// without a workspace makes its own, from its PageArena when it has one.
 struct Workspace::Impl {
+    Impl() = default;
+    explicit Impl(PageArena* a) : arena(a), world(ArenaAllocator<Vec3f>(a)), grid(a) {}
+
+    PageArena* arena = nullptr;  // where the arrays come from (null: malloc)
     std::vector<ObjectData> objects;
     Buffer<Vec3f> world;
     detail::GridScratch grid;
@@ -205,6 +216,7 @@ Workspace::Impl& Workspace::impl() {
 // Morton order cost more (its sort, and the setup's and grid's reads through the permuted list)
 // than it saved; on bunny75k it still saves a little.
 size_t detail::spatialOrderMin = size_t(1) << 16;
+detail::CallArena detail::callArena = detail::CallArena::WhereAvailable;
 
 namespace {
 
@@ -213,23 +225,33 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
           Workspace* workspace) {
     const auto t0 = Clock::now();
     Truth truth;
-    // Without a workspace, the call's own arrays (freed as they were before there were workspaces).
-    Workspace::Impl own;
+    // Without a workspace, the call's own arrays, from its own huge pages where it can
+    // (cullide/unwritten.h's PageArena: fresh 4 KiB pages were half of a 23k-triangle call's time
+    // when malloc had given its memory back); each large one freed as soon as it is no longer needed.
+    std::optional<PageArena> arena;
+    using detail::CallArena;
+    if (!workspace &&
+        (detail::callArena == CallArena::Always ||
+         (detail::callArena == CallArena::WhereAvailable && PageArena::available())))
+        arena.emplace();
+    Workspace::Impl own(arena ? &*arena : nullptr);
     Workspace::Impl& mem = workspace ? workspace->impl() : own;
     Context ctx{mem.objects, false, {}};
-    ctx.objects.resize(scene.objects.size());
+    if (ctx.objects.size() > scene.objects.size()) ctx.objects.resize(scene.objects.size());
+    while (ctx.objects.size() < scene.objects.size()) ctx.objects.emplace_back(mem.arena);
     size_t allTriangles = 0;
     for (const Object& object : scene.objects) allTriangles += object.mesh.triangles.size();
     ctx.storedPlanes = allTriangles <= kStoredPlanes;
     std::vector<std::vector<char>> degenerate(scene.objects.size());
+    Buffer<uint32_t> kept(ArenaAllocator<uint32_t>(mem.arena));  // per object, in turn
     for (size_t o = 0; o < scene.objects.size(); ++o) {
         const Object& object = scene.objects[o];
         const std::string name = "object '" + object.name + "'";
         const std::span<const Triangle> triangles = object.mesh.triangles;
         const size_t n = triangles.size(), nv = object.mesh.positions.size();
-        // World positions (Scene::worldMesh's arithmetic, without copying the triangles).
-        Buffer<Vec3f> ownWorld;  // without a workspace, freed with the object as before
-        Buffer<Vec3f>& world = workspace ? mem.world : ownWorld;
+        // World positions (Scene::worldMesh's arithmetic, without copying the triangles): one
+        // array for every object, freed after the last (a workspace's kept for the next call).
+        Buffer<Vec3f>& world = mem.world;
         world.clear();
         world.resize(nv);
         parallelFor(0, nv, 4096, [&](const tbb::blocked_range<size_t>& r) {
@@ -267,7 +289,7 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                               positions[tri[2]].cast<double>());
             }
         });
-        std::vector<uint32_t> kept;  // the primitives' triangles
+        kept.clear();  // the primitives' triangles
         kept.reserve(n);
         for (size_t t = 0; t < n; ++t) {
             if (subset && !(*subset)[o][t]) continue;
@@ -303,6 +325,9 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
         });
         truth.trianglesTested += d.prims.size();
     }
+    // Freed (the allocators swap with the storage: each array goes back through its own).
+    Buffer<uint32_t>().swap(kept);
+    if (!workspace) Buffer<Vec3f>().swap(mem.world);
     if (truth.trianglesTested > (size_t(1) << 29))
         throw InputError("scene",
                          std::to_string(truth.trianglesTested) +
