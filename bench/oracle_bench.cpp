@@ -16,7 +16,7 @@
 //     same mesh over ours (from CGAL's run in this process, which is registered first; timed
 //     here, best of 5, when a filter left it out). Reference figures: CGAL about 106 ms
 //     (bunny75k), 3.1 s (two cows); target: ours at least 4x faster with identical pairs.
-//   BM_OracleInterleaved/<mesh>/<workspace>: meshes 3-7, one thread, one call of ours then one
+//   BM_OracleInterleaved/<mesh>/<workspace>/<threads>: meshes 3-7, one call of ours then one
 //     of CGAL sequential per iteration (40), so that both are timed in the same minutes of a
 //     machine whose speed drifts (BM_Oracle's vs_cgal divides two runs taken a second apart, and
 //     moves with it). Each call starts with caches the other call left, as a user's single call
@@ -25,6 +25,8 @@
 //     with the chunks the previous call pooled) or malloc, with whatever memory each kept;
 //     2, none and cold: before each call of ours the pool is released and malloc_trim(0) gives
 //     malloc's free memory back, so every page is fresh, as in a process's first call.
+//     threads: ours on one thread (every workspace), or on two (without one: the default call on
+//     this 2-core machine, against CGAL's faster form here, the sequential one).
 //     Counters: ours_ms, cgal_ms (the fastest call of each), vs_cgal_best (their ratio),
 //     vs_cgal_median (the median of the per-iteration ratios); ours' phases as in BM_Oracle
 //     (means).
@@ -207,7 +209,7 @@ void BM_OracleInterleaved(benchmark::State& state) {
     oracle::Workspace workspace;  // used with workspace:1 (oracle::Workspace)
     oracle::Workspace* const reuse = state.range(1) == 1 ? &workspace : nullptr;
     const bool cold = state.range(1) == 2;
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(state.range(2)));
     const Mesh& mesh = benchMesh(which);
     const Scene scene = sceneOf(mesh);
     const oracle::CgalSelfIntersections cgal(mesh, "bench mesh");
@@ -241,8 +243,9 @@ void BM_OracleInterleaved(benchmark::State& state) {
     state.counters["vs_cgal_median"] = ratio[ratio.size() / 2];
 }
 BENCHMARK(BM_OracleInterleaved)
-    ->ArgNames({"mesh", "workspace"})
-    ->ArgsProduct({{3, 4, 5, 6, 7}, {0, 1, 2}})
+    ->ArgNames({"mesh", "workspace", "threads"})
+    ->ArgsProduct({{3, 4, 5, 6, 7}, {0, 1, 2}, {1}})
+    ->ArgsProduct({{3, 4, 5, 6, 7}, {0}, {2}})
     ->Iterations(40)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
