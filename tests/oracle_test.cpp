@@ -458,6 +458,26 @@ TEST(Oracle, SameTruthInMortonAndMeshOrder) {
     both([&] { return exactStage(two, pcs); });
 }
 
+// A PCS for the exact stage of the memory tests: object o's every (o + 1)-th triangle.
+std::vector<TriangleRef> thinnedPcs(const Scene& scene) {
+    std::vector<TriangleRef> pcs;
+    for (uint32_t o = 0; o < uint32_t(scene.objects.size()); ++o)
+        for (uint32_t t = 0; t < uint32_t(scene.objects[o].mesh.triangleCount()); t += 1 + o) pcs.push_back({o, t});
+    return pcs;
+}
+
+OracleOptions welded() {
+    OracleOptions o;
+    o.weldByPosition = true;
+    return o;
+}
+
+OracleOptions withEmbree() {
+    OracleOptions o;
+    o.broadPhase = BroadPhase::Embree;
+    return o;
+}
+
 // Trap: a Workspace keeps the previous call's arrays; a call that reads one of them stale (a
 // plane or record left from a larger scene, the grid's cell starts or entries not reset, the
 // planes of a scene that stores them read by one that does not, another object's world
@@ -474,13 +494,8 @@ TEST(Oracle, WorkspaceReuseGivesTheSameTruth) {
     SceneRequest req;
     req.triangles = 6000;
     const Scene generated = makeTwoCows(cow, req).scene;
-    std::vector<TriangleRef> pcs;
-    for (uint32_t o = 0; o < 2; ++o)
-        for (uint32_t t = 0; t < uint32_t(two.objects[o].mesh.triangleCount()); t += 1 + o) pcs.push_back({o, t});
-    OracleOptions weld;
-    weld.weldByPosition = true;
-    OracleOptions embree;
-    embree.broadPhase = BroadPhase::Embree;
+    const std::vector<TriangleRef> pcs = thinnedPcs(two);
+    const OracleOptions weld = welded(), embree = withEmbree();
     const std::vector<std::function<Truth(Workspace*)>> calls = {
         [&](Workspace* w) { return findIntersections(sceneOf({subdivided}), {}, w); },
         [&](Workspace* w) { return findIntersections(sceneOf({cow}), {}, w); },
@@ -518,13 +533,8 @@ TEST(Oracle, CallArenaGivesTheSameTruth) {
     Scene two = sceneOf({cow, subdivided, cow});
     two.objects[1].transform.translate(Vec3f(0.25f, 0.02f, 0.05f));
     two.objects[2].transform.translate(Vec3f(-0.2f, 0.05f, 0.0f));
-    std::vector<TriangleRef> pcs;
-    for (uint32_t o = 0; o < 3; ++o)
-        for (uint32_t t = 0; t < uint32_t(two.objects[o].mesh.triangleCount()); t += 1 + o) pcs.push_back({o, t});
-    OracleOptions weld;
-    weld.weldByPosition = true;
-    OracleOptions embree;
-    embree.broadPhase = BroadPhase::Embree;
+    const std::vector<TriangleRef> pcs = thinnedPcs(two);
+    const OracleOptions weld = welded(), embree = withEmbree();
     const std::vector<std::function<Truth()>> calls = {
         [&] { return findIntersections(sceneOf({subdivided})); },
         [&] { return findIntersections(two); },
