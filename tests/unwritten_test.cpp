@@ -130,7 +130,8 @@ TEST(PageArena, PoolsEndedChunksForTheNextArena) {
     PageArena::releasePool();
     {
         PageArena arena;
-        for (size_t k = 0; k < PageArena::kPooled + 2; ++k) arena.allocate(size_t(3) << 19, 64);  // 1.5 MiB: a chunk each
+        for (size_t k = 0; k < PageArena::kPooled + 2; ++k)
+            arena.allocate(size_t(3) << 19, 64);  // 1.5 MiB: a chunk each
         EXPECT_EQ(arena.chunks(), PageArena::kPooled + 2);
         EXPECT_EQ(PageArena::pooled(), 0u);
     }

@@ -67,8 +67,10 @@ uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits);
 struct GridScratch {
     GridScratch() = default;
     explicit GridScratch(PageArena* arena)
-        : extent(ArenaAllocator<float>(arena)), raw(ArenaAllocator<uint64_t>(arena)),
-          start(ArenaAllocator<uint32_t>(arena)), entries(ArenaAllocator<uint64_t>(arena)) {}
+        : extent(ArenaAllocator<float>(arena)),
+          raw(ArenaAllocator<uint64_t>(arena)),
+          start(ArenaAllocator<uint32_t>(arena)),
+          entries(ArenaAllocator<uint64_t>(arena)) {}
 
     bool keep = false;
     Buffer<float> extent;  // per box: its largest extent (the cell size's median)

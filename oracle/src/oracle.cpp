@@ -44,7 +44,8 @@ using detail::Buffer;
 struct ObjectData {
     ObjectData() = default;
     explicit ObjectData(PageArena* arena)
-        : prims(ArenaAllocator<Prim>(arena)), boxes(ArenaAllocator<Box>(arena)),
+        : prims(ArenaAllocator<Prim>(arena)),
+          boxes(ArenaAllocator<Box>(arena)),
           planes(ArenaAllocator<detail::Plane>(arena)) {}
 
     Buffer<Prim> prims;  // Embree primitive order = ascending triangle index
