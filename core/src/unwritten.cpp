@@ -14,7 +14,9 @@ using Pages = UnwrittenAllocator<std::byte, true>;  // whole 2 MiB pages from kC
 struct ChunkPool {
     std::mutex mutex;
     std::vector<std::byte*> free;
-    ~ChunkPool() { PageArena::releasePool(); }  // at exit: back to the system (LeakSanitizer)
+    ~ChunkPool() {  // at exit: back to the system (LeakSanitizer)
+        for (std::byte* c : free) Pages().deallocate(c, PageArena::kChunk);
+    }
 };
 ChunkPool& pool() {
     static ChunkPool p;
