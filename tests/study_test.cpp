@@ -274,7 +274,8 @@ TEST(StudyCauses, DecideFollowsTheRules) {
 
 // The acceptance criterion: every false prune on every bundled and generated scene has a cause.
 // Trap: the pass views shrink with the PCS; judging a pair in the whole-scene view (as
-// measurePcs's explanations do) calls sampling misses in a finer grid unexplained.
+// measurePcs's explanations do) calls sampling misses in a finer grid unexplained. Under the
+// sanitizers at 100 x 100 only (both resolutions took 54 s of the ThreadSanitizer stage).
 TEST(StudyCauses, NoUnexplainedFalsePrunesOnBundledAndGeneratedScenes) {
     Spec s;
     s.scenes = {std::string(CULLIDE_DATA_DIR) + "/scenes/bunny_through_cow.json@0",
@@ -285,6 +286,7 @@ TEST(StudyCauses, NoUnexplainedFalsePrunesOnBundledAndGeneratedScenes) {
                 "twist:3000"};
     s.methods = {"original", "modified"};
     s.resolutions = {"100", "500"};
+    if (CULLIDE_SANITIZED) s.resolutions = {"100"};
     s.depths = {"16", "24"};
     s.repeats = 1;
     test::TempDir dir;

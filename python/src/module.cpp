@@ -620,20 +620,49 @@ PYBIND11_MODULE(_cullide, m) {
         .def("__len__", [](const CommandList& l) { return l.commands().size(); });
 
     py::class_<PyCpuBackend>(m, "CpuBackend", "The CPU reference backend (a deterministic software depth buffer).")
-        .def(py::init([](int subpixelBits, int threads, int tileSize, bool scalarReference) {
+        .def(py::init([](int subpixelBits, int threads, int tileSize, bool scalarReference, bool simd, bool direct,
+                         long long viewCacheBytes, const std::string& fillRule) {
                  raster::CpuBackendOptions o;
                  o.subpixelBits = subpixelBits;
                  o.threads = checkedThreads(threads);
                  o.tileSize = tileSize;
                  o.scalarReference = scalarReference;
+                 o.simd = simd;
+                 o.direct = direct;
+                 if (viewCacheBytes < 0)
+                     fail("argument view_cache_bytes: " + std::to_string(viewCacheBytes) + " is negative");
+                 o.viewCacheBytes = size_t(viewCacheBytes);
+                 if (fillRule == "bottom-left") o.fillRule = raster::FillRule::BottomLeft;
+                 else if (fillRule == "top-left") o.fillRule = raster::FillRule::TopLeft;
+                 else fail("argument fill_rule: '" + fillRule + "' is not 'bottom-left' or 'top-left'");
                  PyCpuBackend b;
                  b.backend = raster::makeCpuBackend(o);
                  return b;
              }),
              py::arg("subpixel_bits") = raster::kDefaultSubpixelBits, py::arg("threads") = 0,
-             py::arg("tile_size") = raster::kDefaultTileSize, py::arg("scalar_reference") = false)
+             py::arg("tile_size") = raster::kDefaultTileSize, py::arg("scalar_reference") = false,
+             py::arg("simd") = true, py::arg("direct") = true,
+             py::arg("view_cache_bytes") = (long long)raster::CpuBackendOptions{}.viewCacheBytes,
+             py::arg("fill_rule") = "bottom-left")
         .def(
             "describe", [](const PyCpuBackend& b) { return b.backend->describe(); }, "A short description.")
+        .def_property_readonly(
+            "last_stats",
+            [](const PyCpuBackend& b) {
+                const raster::RasterStats& s = b.backend->lastStats();
+                py::dict d;
+                d["draws"] = s.draws, d["triangles"] = s.triangles, d["rejected"] = s.rejected;
+                d["clipped"] = s.clipped, d["zero_area"] = s.zeroArea, d["fragments"] = s.fragments;
+                d["passed"] = s.passed;
+                return d;
+            },
+            "Counters of the last execute() (RasterStats; per drawn triangle instance), the same on every path.")
+        .def_property_readonly(
+            "last_ran_direct", [](const PyCpuBackend& b) { return b.backend->lastRanDirect(); },
+            "Whether the last execute() took the direct path (option direct).")
+        .def_property_readonly(
+            "last_replayed_view", [](const PyCpuBackend& b) { return b.backend->lastReplayedView(); },
+            "Whether the last execute() replayed fragments kept under its view (option view_cache_bytes).")
         .def(
             "set_geometry",
             [](PyCpuBackend& b, const py::object& v, const py::object& f) {

@@ -349,3 +349,59 @@ def test_docstrings():
         for attr, value in vars(cls).items():
             if not attr.startswith("_"):
                 assert getattr(value, "__doc__", None), cls.__name__ + "." + attr
+
+
+# Trap: the backend's speed options from Python (simd, direct, view cache, tile size, the scalar
+# reference) must all give the same queries, depth and counters bit for bit, and the direct path
+# must really be taken on one thread and not when turned off (a binding that dropped the option
+# would pass the equality alone). The fill rule gets its own check: a unit square whose bottom and
+# left edges (in the view) and diagonal run through pixel centres covers each centre once, and the
+# bottom row is in under the bottom-left rule (16 samples) and out under the top-left one (12).
+def test_cpu_backend_options_same_results():
+    rng = np.random.default_rng(7)
+    n = 3000
+    centres = rng.uniform(0.05, 0.95, size=(n, 1, 3))
+    v = (centres + rng.uniform(-0.03, 0.03, size=(n, 3, 3))).reshape(-1, 3).astype(np.float32)
+    f = np.arange(3 * n, dtype=np.uint32).reshape(n, 3)
+    cl = cullide.CommandList()
+    cl.clear(1.0)
+    cl.depth_func("less")
+    for first in range(0, n, 500):
+        cl.begin_query()
+        cl.draw(first, 500)
+        cl.end_query()
+    results = []
+    for kw in ({}, {"direct": False}, {"simd": False}, {"view_cache_bytes": 0}, {"tile_size": 16},
+               {"scalar_reference": True}, {"threads": 2, "direct": False}):
+        b = cullide.CpuBackend(threads=kw.pop("threads", 1), **kw)
+        b.set_geometry(v, f)
+        frame = b.set_view((0, 0, 1), (0, 1, 0, 1, -1, 2))
+        x, y = v @ np.array(frame["right"]), v @ np.array(frame["up"])
+        b.set_view((0, 0, 1), (x.min(), x.max(), y.min(), y.max(), -1, 2), width=97, height=61, depth="d16")
+        q = b.execute(cl)
+        results.append((list(q), b.read_depth().tobytes(), b.last_stats))
+        if kw == {}:
+            assert b.last_ran_direct
+        if kw.get("direct") is False:
+            assert not b.last_ran_direct
+    assert results[0][2]["fragments"] > 0 and results[0][2]["triangles"] == n
+    assert all(r == results[0] for r in results[1:])
+    # Two triangles sharing a diagonal; pixel centres on the square's low edges and 0.25, 0.5, 0.75 in.
+    q = np.array([[0, 0, 0.5], [1, 0, 0.5], [1, 1, 0.5], [0, 1, 0.5]], dtype=np.float32)
+    counts = []
+    for rule in ("bottom-left", "top-left"):
+        b = cullide.CpuBackend(fill_rule=rule)
+        b.set_geometry(q, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32))
+        frame = b.set_view((0, 0, 1), (0, 1, 0, 1, 0, 1))
+        x0, y0 = (q @ np.array(frame["right"])).min(), (q @ np.array(frame["up"])).min()
+        b.set_view((0, 0, 1), (x0 - 0.125, x0 + 0.875, y0 - 0.125, y0 + 0.875, 0, 1), width=4, height=4)
+        one = cullide.CommandList()
+        one.begin_query()
+        one.draw(0, 2)
+        one.end_query()
+        counts.append(int(b.execute(one)[0]))
+    assert counts == [16, 12]
+    with pytest.raises(ValueError, match="fill_rule"):
+        cullide.CpuBackend(fill_rule="top-right")
+    with pytest.raises(ValueError, match="view_cache_bytes"):
+        cullide.CpuBackend(view_cache_bytes=-1)

@@ -288,12 +288,12 @@ int runTune(const TuneOptions& o) {
     std::printf("tune %s: %zu configuration(s) measured; Pareto front (time to exact pairs vs false prunes):\n",
                 o.scene.c_str(), all.size());
     std::string header = " ";
-    for (const TuneAxis& a : axes) header += " " + pad(a.name, 12);
+    for (const TuneAxis& a : axes) header.append(" ").append(pad(a.name, 12));
     std::printf("%s %10s %10s %10s %12s %10s\n", header.c_str(), "time_ms", "prune_ms", "exact_ms", "false_prunes",
                 "pcs");
     for (const auto& [c, m] : front) {
         std::string row = " ";
-        for (const std::string& v : c) row += " " + pad(v, 12);
+        for (const std::string& v : c) row.append(" ").append(pad(v, 12));
         std::printf("%s %10.2f %10.2f %10.2f %12zu %10zu\n", row.c_str(), m.timeMs, m.pruneMs, m.exactMs, m.falsePrunes,
                     m.pcs);
     }
