@@ -352,9 +352,10 @@ def test_docstrings():
 
 
 # Trap: the backend's speed options from Python (simd, direct, view cache, tile size, the scalar
-# reference) must all give the same queries, depth and counters bit for bit, and the direct path
-# must really be taken on one thread and not when turned off (a binding that dropped the option
-# would pass the equality alone). The fill rule gets its own check: a unit square whose bottom and
+# reference) must all give the same queries, depth and counters bit for bit, the second run of a
+# list too; and each option must reach the backend (a binding that dropped one would pass the
+# equality alone): the direct path taken on one thread and not when turned off, the second run
+# replayed from the view cache on the tile path and not when the cache is 0 bytes. The fill rule gets its own check: a unit square whose bottom and
 # left edges (in the view) and diagonal run through pixel centres covers each centre once, and the
 # bottom row is in under the bottom-left rule (16 samples) and out under the top-left one (12).
 def test_cpu_backend_options_same_results():
@@ -371,19 +372,22 @@ def test_cpu_backend_options_same_results():
         cl.draw(first, 500)
         cl.end_query()
     results = []
-    for kw in ({}, {"direct": False}, {"simd": False}, {"view_cache_bytes": 0}, {"tile_size": 16},
-               {"scalar_reference": True}, {"threads": 2, "direct": False}):
+    for kw in ({}, {"direct": False}, {"direct": False, "view_cache_bytes": 0}, {"simd": False},
+               {"tile_size": 16}, {"scalar_reference": True}, {"threads": 2, "direct": False}):
         b = cullide.CpuBackend(threads=kw.pop("threads", 1), **kw)
         b.set_geometry(v, f)
         frame = b.set_view((0, 0, 1), (0, 1, 0, 1, -1, 2))
         x, y = v @ np.array(frame["right"]), v @ np.array(frame["up"])
         b.set_view((0, 0, 1), (x.min(), x.max(), y.min(), y.max(), -1, 2), width=97, height=61, depth="d16")
-        q = b.execute(cl)
-        results.append((list(q), b.read_depth().tobytes(), b.last_stats))
-        if kw == {}:
-            assert b.last_ran_direct
-        if kw.get("direct") is False:
-            assert not b.last_ran_direct
+        for run in range(2):
+            q = b.execute(cl)
+            results.append((list(q), b.read_depth().tobytes(), b.last_stats))
+            if kw == {} or kw.get("direct") is False:
+                assert b.last_ran_direct == (kw == {})
+            if kw == {"direct": False}:
+                assert b.last_replayed_view == (run == 1)
+            if kw.get("view_cache_bytes") == 0:
+                assert not b.last_replayed_view
     assert results[0][2]["fragments"] > 0 and results[0][2]["triangles"] == n
     assert all(r == results[0] for r in results[1:])
     # Two triangles sharing a diagonal; pixel centres on the square's low edges and 0.25, 0.5, 0.75 in.
