@@ -478,6 +478,122 @@ OracleOptions withEmbree() {
     return o;
 }
 
+// Trap: scenes of up to detail::storedPlanesMax triangles store each triangle's plane and test
+// their candidates a batch at a time in sharing classes (detail::primContacts), larger ones one
+// pair at a time (detail::primContact); the truth must not depend on the path. Both on the same
+// scenes: the subdivided cow (nearly coplanar neighbours), nearly coplanar fans (both classes of
+// pair), two cows (pairs between objects), the exact stage on a subset, Embree's broad phase
+// (other batches, in another order) and a generated scene welded by position.
+TEST(Oracle, SameTruthWithStoredAndComputedPlanes) {
+    const size_t saved = detail::storedPlanesMax;
+    auto both = [&](auto&& run) {
+        detail::storedPlanesMax = ~size_t(0);  // planes stored, batches by class
+        const Truth stored = run();
+        detail::storedPlanesMax = 0;  // planes computed per pair, one pair at a time
+        const Truth computed = run();
+        detail::storedPlanesMax = saved;
+        EXPECT_FALSE(stored.pairs.empty());
+        EXPECT_EQ(stored.pairs, computed.pairs);
+        EXPECT_EQ(stored.degenerate, computed.degenerate);
+        EXPECT_EQ(stored.candidatePairs, computed.candidatePairs);
+    };
+    const Mesh cow = bundled("cow.off");
+    both([&] { return findIntersections(sceneOf({subdivide(cow)})); });
+    both([&] { return findIntersections(sceneOf({test::nearlyCoplanarFans(11, 30)})); });
+    Scene two = sceneOf({cow, cow});
+    two.objects[1].transform.translate(Vec3f(0.25f, 0.02f, 0.05f));  // as the bench's two cows
+    both([&] { return findIntersections(two); });
+    both([&] { return exactStage(two, thinnedPcs(two)); });
+    both([&] { return findIntersections(two, withEmbree()); });
+    SceneRequest req;
+    req.triangles = 6000;
+    const Scene generated = makeTwoCows(cow, req).scene;
+    both([&] { return findIntersections(generated, welded()); });
+}
+
+// Trap: detail::primContacts sorts a batch's pairs into sharing classes, 256 at a time, tests each
+// class in its own loop (a vertex-sharing pair's first rejection in one more) and writes only the
+// pairs that meet. A pair lost or tested twice at a chunk's end, one class given another's test,
+// a survivor's signs or index shifted by the compaction, the other object's plane read, a pair
+// in the wrong order tested or counted: other hits or another count than primContact one pair at
+// a time. Pairs of one object that share an edge, a vertex, nothing and all three corners (a
+// duplicated face), pairs between two objects (which share no vertex whatever their ids), pairs
+// in the wrong order (reversed, or a triangle with itself), shuffled, all in one batch (chunks,
+// the last one partial) and the first 100 (one partial chunk).
+TEST(OracleNarrowPhase, BatchMatchesOnePairAtATime) {
+    Mesh fans = test::nearlyCoplanarFans(7, 12);
+    fans.triangles.insert(fans.triangles.begin() + 4, fans.triangles[3]);  // a duplicated face: three shared corners
+    Mesh moved = fans;
+    for (Vec3f& p : moved.positions) p += Vec3f(0.001f, -0.002f, 0.0005f);  // crosses the first
+    struct Records {
+        std::vector<detail::Prim> prims;
+        std::vector<detail::Plane> planes;
+    };
+    auto recordsOf = [](const Mesh& m) {
+        Records r;
+        for (uint32_t t = 0; t < uint32_t(m.triangles.size()); ++t) {
+            detail::Prim p{};
+            for (int k = 0; k < 3; ++k)
+                for (int c = 0; c < 3; ++c) p.p[k][c] = m.positions[m.triangles[t][k]][c];
+            p.v = m.triangles[t];
+            p.triangle = t;
+            r.prims.push_back(p);
+            r.planes.push_back(detail::planeOf(p));
+        }
+        return r;
+    };
+    const Records objects[2] = {recordsOf(fans), recordsOf(moved)};
+    const detail::StoredPrims stored[2] = {{objects[0].prims.data(), objects[0].planes.data()},
+                                           {objects[1].prims.data(), objects[1].planes.data()}};
+    const uint32_t n = uint32_t(fans.triangles.size());
+    std::vector<detail::Candidate> pairs;
+    for (uint32_t a = 0; a < n; ++a)
+        for (uint32_t b = 0; b < n; ++b) {
+            if (a <= b && b < a + 40) pairs.push_back({0, a, 0, b});  // neighbours among them; a == b: wrong order
+            if (b + 3 == a) pairs.push_back({0, a, 0, b});  // wrong order
+            if ((a * 7 + b) % 29 == 0) pairs.push_back({0, a, 1, b});
+            if ((a * 5 + b) % 61 == 0) pairs.push_back({1, a, 0, b});  // wrong order
+        }
+    std::shuffle(pairs.begin(), pairs.end(), std::mt19937(5));
+    ASSERT_GT(pairs.size(), 2000u);
+    ASSERT_NE(pairs.size() % 256, 0u);
+    int sharing[4] = {0, 0, 0, 0};
+    for (uint32_t count : {uint32_t(pairs.size()), 100u}) {
+        std::vector<std::pair<uint32_t, Contact>> expected;
+        size_t expectedTested = 0;
+        for (uint32_t k = 0; k < count; ++k) {
+            const detail::Candidate& c = pairs[k];
+            if (c.object0 > c.object1 || (c.object0 == c.object1 && c.prim0 >= c.prim1)) continue;
+            ++expectedTested;
+            const detail::Prim &a = objects[c.object0].prims[c.prim0], &b = objects[c.object1].prims[c.prim1];
+            if (c.object0 == c.object1)
+                ++sharing[std::count_if(a.v.begin(), a.v.end(),
+                                        [&](uint32_t v) { return std::find(b.v.begin(), b.v.end(), v) != b.v.end(); })];
+            const Contact contact = detail::primContact(a, objects[c.object0].planes[c.prim0], b,
+                                                        &objects[c.object1].planes[c.prim1], c.object0 == c.object1);
+            if (contact != Contact::None) expected.emplace_back(k, contact);
+        }
+        std::vector<detail::Hit> hits(count);
+        size_t tested = 0;
+        const uint32_t found = detail::primContacts(stored, pairs.data(), count, hits.data(), tested);
+        std::vector<std::pair<uint32_t, Contact>> got;
+        for (uint32_t h = 0; h < found; ++h) got.emplace_back(hits[h].pair, hits[h].contact);
+        std::sort(got.begin(), got.end());
+        EXPECT_EQ(got, expected) << count << " pairs";
+        EXPECT_EQ(tested, expectedTested) << count << " pairs";
+        if (count == pairs.size()) {
+            // Both answers, between the objects and within the first.
+            EXPECT_GT(
+                std::count_if(expected.begin(), expected.end(), [](auto& e) { return e.second == Contact::Crossing; }),
+                2);
+            EXPECT_GT(
+                std::count_if(expected.begin(), expected.end(), [](auto& e) { return e.second == Contact::Touching; }),
+                2);
+        }
+    }
+    for (int k = 0; k < 4; ++k) EXPECT_GT(sharing[k], 0) << "no tested pair shares " << k << " corners";
+}
+
 // Trap: a Workspace keeps the previous call's arrays; a call that reads one of them stale (a
 // plane or record left from a larger scene, the grid's cell starts or entries not reset, the
 // planes of a scene that stores them read by one that does not, another object's world

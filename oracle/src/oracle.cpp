@@ -50,13 +50,8 @@ struct ObjectData {
 
     Buffer<Prim> prims;  // Embree primitive order = ascending triangle index
     Buffer<Box> boxes;  // one per primitive
-    Buffer<detail::Plane> planes;  // one per primitive on small scenes (kStoredPlanes), else empty
+    Buffer<detail::Plane> planes;  // one per primitive on small scenes (storedPlanesMax), else empty
 };
-
-// Up to this many triangles in the scene, the planes are computed once in the setup (48 bytes each)
-// rather than per pair that needs them (6% of the oracle on a 6k mesh); beyond, the memory
-// counts more.
-constexpr size_t kStoredPlanes = size_t(1) << 18;
 
 struct Local {
     std::vector<IntersectingPair> pairs;
@@ -66,6 +61,7 @@ struct Local {
 struct Context {
     std::vector<ObjectData>& objects;  // the call's own, or its workspace's
     bool storedPlanes = false;  // ObjectData::planes filled
+    std::vector<detail::StoredPrims> stored;  // per object its records and planes, when stored
     tbb::enumerable_thread_specific<Local> locals;
 };
 
@@ -73,42 +69,50 @@ PairClass toClass(Contact c) {
     return c == Contact::Crossing ? PairClass::Crossing : PairClass::Touching;
 }
 
+// A pair that meets, triangles in ascending order in one object (primitives are in spatial order
+// on large meshes, and the broad phase's pairs in its own).
+void record(Local& local, const ObjectData* objects, const Candidate& c, Contact contact) {
+    const Prim& a = objects[c.object0].prims[c.prim0];
+    const Prim& b = objects[c.object1].prims[c.prim1];
+    if (c.object0 == c.object1 && a.triangle > b.triangle)
+        local.pairs.push_back({c.object0, b.triangle, c.object1, a.triangle, toClass(contact)});
+    else local.pairs.push_back({c.object0, a.triangle, c.object1, b.triangle, toClass(contact)});
+}
+
 // The narrow phase, called concurrently by the broad phase with batches of candidates.
 void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
     Context& ctx = *static_cast<Context*>(user);
     Local& local = ctx.locals.local();
     const ObjectData* const objects = ctx.objects.data();
-    const Prim* last = nullptr;  // the grid hands over runs of pairs with the same first primitive
+    if (ctx.storedPlanes) {  // by batches, in sharing classes (primContacts)
+        constexpr uint32_t kHits = 1024;
+        detail::Hit hits[kHits];
+        for (uint32_t first = 0; first < count; first += kHits) {
+            const uint32_t n = std::min(kHits, count - first);
+            const uint32_t found = detail::primContacts(ctx.stored.data(), pairs + first, n, hits, local.candidates);
+            for (uint32_t h = 0; h < found; ++h) record(local, objects, pairs[first + hits[h].pair], hits[h].contact);
+        }
+        return;
+    }
+    // One pair at a time, each first triangle's plane computed once per run of pairs that share
+    // it (the grid hands over such runs).
+    const Prim* last = nullptr;
     detail::Plane plane;
-    const bool stored = ctx.storedPlanes;
-    // The second record (and plane) of the pair kAhead on are fetched ahead: they are random
-    // reads, whose misses were a quarter of the narrow phase's time on a 46k mesh.
+    // The second record of the pair kAhead on is fetched ahead: they are random reads, whose
+    // misses were a quarter of the narrow phase's time on a 46k mesh.
     constexpr uint32_t kAhead = 8;
     for (uint32_t k = 0; k < count; ++k) {
         const Candidate& c = pairs[k];
-        if (k + kAhead < count) {
-            const Candidate& f = pairs[k + kAhead];
-            __builtin_prefetch(&objects[f.object1].prims[f.prim1]);
-            if (stored) __builtin_prefetch(&objects[f.object1].planes[f.prim1]);
-        }
+        if (k + kAhead < count) __builtin_prefetch(&objects[pairs[k + kAhead].object1].prims[pairs[k + kAhead].prim1]);
         // The broad phase reports each unordered pair once (the filter is for one reporting
-        // both orders); primitives are in spatial order, so order the triangles for the output.
+        // both orders).
         if (c.object0 > c.object1 || (c.object0 == c.object1 && c.prim0 >= c.prim1)) continue;
         ++local.candidates;
         const Prim& a = objects[c.object0].prims[c.prim0];
-        const Prim& b = objects[c.object1].prims[c.prim1];
-        Contact contact;
-        if (stored) {
-            contact = detail::primContact(a, objects[c.object0].planes[c.prim0], b,
-                                          &objects[c.object1].planes[c.prim1], c.object0 == c.object1);
-        } else {
-            if (&a != last) plane = detail::planeOf(a), last = &a;
-            contact = detail::primContact(a, plane, b, nullptr, c.object0 == c.object1);
-        }
-        if (contact == Contact::None) continue;
-        if (c.object0 == c.object1 && a.triangle > b.triangle)
-            local.pairs.push_back({c.object0, b.triangle, c.object1, a.triangle, toClass(contact)});
-        else local.pairs.push_back({c.object0, a.triangle, c.object1, b.triangle, toClass(contact)});
+        if (&a != last) plane = detail::planeOf(a), last = &a;
+        const Contact contact =
+            detail::primContact(a, plane, objects[c.object1].prims[c.prim1], nullptr, c.object0 == c.object1);
+        if (contact != Contact::None) record(local, objects, c, contact);
     }
 }
 
@@ -217,6 +221,7 @@ Workspace::Impl& Workspace::impl() {
 // Morton order cost more (its sort, and the setup's and grid's reads through the permuted list)
 // than it saved; on bunny75k it still saves a little.
 size_t detail::spatialOrderMin = size_t(1) << 16;
+size_t detail::storedPlanesMax = size_t(1) << 18;
 detail::CallArena detail::callArena = detail::CallArena::WhereAvailable;
 
 namespace {
@@ -237,12 +242,12 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
         arena.emplace();
     Workspace::Impl own(arena ? &*arena : nullptr);
     Workspace::Impl& mem = workspace ? workspace->impl() : own;
-    Context ctx{mem.objects, false, {}};
+    Context ctx{mem.objects, false, {}, {}};
     if (ctx.objects.size() > scene.objects.size()) ctx.objects.resize(scene.objects.size());
     while (ctx.objects.size() < scene.objects.size()) ctx.objects.emplace_back(mem.arena);
     size_t allTriangles = 0;
     for (const Object& object : scene.objects) allTriangles += object.mesh.triangles.size();
-    ctx.storedPlanes = allTriangles <= kStoredPlanes;
+    ctx.storedPlanes = allTriangles <= detail::storedPlanesMax;
     std::vector<std::vector<char>> degenerate(scene.objects.size());
     Buffer<uint32_t> kept(ArenaAllocator<uint32_t>(mem.arena));  // per object, in turn
     for (size_t o = 0; o < scene.objects.size(); ++o) {
@@ -313,7 +318,8 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                     prim.v[k] = vertexId.empty() ? tri[k] : vertexId[tri[k]];
                 }
                 prim.triangle = t;
-                if (ctx.storedPlanes) d.planes[i] = detail::planeOf(prim);
+                if (ctx.storedPlanes)
+                    d.planes[i] = detail::planeOf(positions[tri[0]], positions[tri[1]], positions[tri[2]]);
                 Box& b = d.boxes[i];
                 for (int k = 0; k < 3; ++k) {
                     const float a = positions[tri[0]][k], bb = positions[tri[1]][k], c = positions[tri[2]][k];
@@ -335,6 +341,8 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                              " triangles to test: the oracle's broad phase takes at most 2^29 (536,870,912)");
     truth.setupSeconds = since(t0);
 
+    if (ctx.storedPlanes)
+        for (const ObjectData& d : ctx.objects) ctx.stored.push_back({d.prims.data(), d.planes.data()});
     std::vector<std::span<const Box>> boxes(ctx.objects.size());
     for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = ctx.objects[o].boxes;
     const detail::BroadPhaseTimes bt = options.broadPhase == BroadPhase::Embree
