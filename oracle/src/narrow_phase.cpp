@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #if defined(__SSE2__)
@@ -156,8 +157,20 @@ struct Sharing {
 // is a different corner on both sides.
 inline uint32_t sharedMask(const Prim& a, const Prim& b) {
     uint32_t mask = 0;
+#if defined(__SSE2__)
+    // b's ids and the record's triangle index after them in one vector (that lane masked off),
+    // each of a's ids compared with all of them at once: 5% of the oracle on the cow, against nine
+    // scalar comparisons.
+    static_assert(offsetof(Prim, triangle) == offsetof(Prim, v) + 3 * sizeof(uint32_t));
+    const __m128i bv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b.v.data()));
+    for (int i = 0; i < 3; ++i) {
+        const __m128i same = _mm_cmpeq_epi32(bv, _mm_set1_epi32(int(a.v[i])));
+        mask |= (uint32_t(_mm_movemask_ps(_mm_castsi128_ps(same))) & 7) << (3 * i);
+    }
+#else
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) mask |= uint32_t(a.v[i] == b.v[j]) << (3 * i + j);
+#endif
     return mask;
 }
 
