@@ -428,6 +428,15 @@ TEST(OracleCgal, SubdividedCowSameAsCgal) {
     expectSameAsCgal(subdivide(bundled("cow.off")), "subdivided cow");
 }
 
+// Two ways of computing one truth gave the same pairs (some: a scene without any checks nothing),
+// degenerate triangles and candidate count.
+void expectSameTruth(const Truth& a, const Truth& b) {
+    EXPECT_FALSE(a.pairs.empty());
+    EXPECT_EQ(a.pairs, b.pairs);
+    EXPECT_EQ(a.degenerate, b.degenerate);
+    EXPECT_EQ(a.candidatePairs, b.candidatePairs);
+}
+
 // Trap: objects of up to detail::spatialOrderMin triangles keep the mesh's own order, larger ones
 // the Morton order; the truth must not depend on it (the pairs are put in triangle order, and the
 // triangles come back from the records, not from their positions). Both orders on the same
@@ -441,10 +450,7 @@ TEST(Oracle, SameTruthInMortonAndMeshOrder) {
         detail::spatialOrderMin = ~size_t(0);  // every object in its own order
         const Truth own = run();
         detail::spatialOrderMin = saved;
-        EXPECT_FALSE(morton.pairs.empty());
-        EXPECT_EQ(morton.pairs, own.pairs);
-        EXPECT_EQ(morton.degenerate, own.degenerate);
-        EXPECT_EQ(morton.candidatePairs, own.candidatePairs);
+        expectSameTruth(morton, own);
     };
     const Mesh cow = subdivide(bundled("cow.off"));
     both([&] { return findIntersections(sceneOf({cow})); });
@@ -492,10 +498,7 @@ TEST(Oracle, SameTruthWithStoredAndComputedPlanes) {
         detail::storedPlanesMax = 0;  // planes computed per pair, one pair at a time
         const Truth computed = run();
         detail::storedPlanesMax = saved;
-        EXPECT_FALSE(stored.pairs.empty());
-        EXPECT_EQ(stored.pairs, computed.pairs);
-        EXPECT_EQ(stored.degenerate, computed.degenerate);
-        EXPECT_EQ(stored.candidatePairs, computed.candidatePairs);
+        expectSameTruth(stored, computed);
     };
     const Mesh cow = bundled("cow.off");
     both([&] { return findIntersections(sceneOf({subdivide(cow)})); });

@@ -247,8 +247,8 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         Buffer<uint32_t>& start = scratch.start;  // cell c's entries from start[c]
         start.assign(cellCount + 1, 0);
         // Written through local pointers (push_back reloaded and stored the vector's end for
-        // every entry, which the counters might alias: a fifth of this loop's time); room for a
-        // box's entries is made before each box.
+        // every entry, which the counters might alias: 1-2% of the oracle on 5.8k-46k
+        // triangles); room for a box's entries is made before each box.
         raw.clear();
         raw.resize(4 * n + kMaxCellsPerBox);
         size_t used = 0;
