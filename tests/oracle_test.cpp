@@ -428,8 +428,8 @@ TEST(OracleCgal, SubdividedCowSameAsCgal) {
     expectSameAsCgal(subdivide(bundled("cow.off")), "subdivided cow");
 }
 
-// Two ways of computing one truth gave the same pairs (some: a scene without any checks nothing),
-// degenerate triangles and candidate count.
+// Two ways of computing one truth gave the same pairs (and some: two empty truths would compare
+// equal without checking anything), degenerate triangles and candidate count.
 void expectSameTruth(const Truth& a, const Truth& b) {
     EXPECT_FALSE(a.pairs.empty());
     EXPECT_EQ(a.pairs, b.pairs);
@@ -489,7 +489,7 @@ OracleOptions withEmbree() {
 // pair at a time (detail::primContact); the truth must not depend on the path. Both on the same
 // scenes: the subdivided cow (nearly coplanar neighbours), nearly coplanar fans (both classes of
 // pair), two cows (pairs between objects), the exact stage on a subset, Embree's broad phase
-// (other batches, in another order) and a generated scene welded by position.
+// (its own batches) and a generated scene welded by position.
 TEST(Oracle, SameTruthWithStoredAndComputedPlanes) {
     const size_t saved = detail::storedPlanesMax;
     auto both = [&](auto&& run) {

@@ -174,13 +174,18 @@ inline uint32_t sharedMask(const Prim& a, const Prim& b) {
     return mask;
 }
 
+// The number of shared corners (bits of the mask), without a loop.
+inline int sharedCount(uint32_t mask) {
+    const uint32_t rest = mask & (mask - 1);  // (std::popcount is a libgcc call on baseline x86-64)
+    return int(mask != 0) + int(rest != 0) + int((rest & (rest - 1)) != 0);
+}
+
 inline Sharing sharingOf(uint32_t mask) {
     // The first two shared corners, without a loop (its trip count mispredicted: a tenth of the
     // oracle's time); bit 9 stands in when there are fewer (its corners then unused).
-    const uint32_t rest = mask & (mask - 1);  // (std::popcount is a libgcc call on baseline x86-64)
+    const uint32_t rest = mask & (mask - 1);
     const int bit0 = std::countr_zero(mask | 1u << 9), bit1 = std::countr_zero(rest | 1u << 9);
-    return {
-        int(mask != 0) + int(rest != 0) + int((rest & (rest - 1)) != 0), {bit0 / 3, bit1 / 3}, {bit0 % 3, bit1 % 3}};
+    return {sharedCount(mask), {bit0 / 3, bit1 / 3}, {bit0 % 3, bit1 % 3}};
 }
 
 // A pair sharing an edge (s.count == 2).
@@ -302,13 +307,10 @@ uint32_t primContacts(const StoredPrims* objects, const Candidate* pairs, uint32
                 __builtin_prefetch(&objects[f.object1].planes[f.prim1]);
             }
             const Candidate& c = chunk[k];
-            const bool wrongOrder = c.object0 > c.object1 || (c.object0 == c.object1 && c.prim0 >= c.prim1);
             const uint32_t m = c.object0 == c.object1
                 ? sharedMask(objects[c.object0].prims[c.prim0], objects[c.object1].prims[c.prim1])
                 : 0;
-            const uint32_t rest = m & (m - 1);
-            const uint32_t cls =
-                wrongOrder ? 4 : uint32_t(m != 0) + uint32_t(rest != 0) + uint32_t((rest & (rest - 1)) != 0);
+            const uint32_t cls = inTestOrder(c) ? uint32_t(sharedCount(m)) : 4;
             mask[k] = uint16_t(m);
             index[cls][size[cls]++] = uint16_t(k);
         }

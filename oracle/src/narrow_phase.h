@@ -70,6 +70,13 @@ struct StoredPrims {
     const Plane* planes;
 };
 
+// Whether the broad phase reported the pair in the order the narrow phase tests: the lower object
+// first, the lower primitive first within one object (it reports each unordered pair once; a pair
+// in the other order, or a primitive with itself, is skipped and not counted).
+inline bool inTestOrder(const Candidate& c) {
+    return c.object0 < c.object1 || (c.object0 == c.object1 && c.prim0 < c.prim1);
+}
+
 // A candidate pair whose triangles meet: its index in the batch, and how.
 struct Hit {
     uint32_t pair;
@@ -78,8 +85,7 @@ struct Hit {
 
 // primContact of each candidate pair (objects[o]: object o's records, planes stored): writes the
 // pairs that meet to hits (room for count), returns how many, and adds to `tested` the number of
-// pairs tested (a pair reported in the wrong order, object0 > object1 or prim0 >= prim1 in one
-// object, is not).
+// pairs tested (those inTestOrder).
 uint32_t primContacts(const StoredPrims* objects, const Candidate* pairs, uint32_t count, Hit* hits, size_t& tested);
 
 }  // namespace cullide::oracle::detail

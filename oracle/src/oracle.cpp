@@ -56,6 +56,7 @@ struct ObjectData {
 struct Local {
     std::vector<IntersectingPair> pairs;
     size_t candidates = 0;
+    std::vector<detail::Hit> hits;  // primContacts' output, room for a batch
 };
 
 struct Context {
@@ -85,13 +86,10 @@ void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
     Local& local = ctx.locals.local();
     const ObjectData* const objects = ctx.objects.data();
     if (ctx.storedPlanes) {  // by batches, in sharing classes (primContacts)
-        constexpr uint32_t kHits = 1024;
-        detail::Hit hits[kHits];
-        for (uint32_t first = 0; first < count; first += kHits) {
-            const uint32_t n = std::min(kHits, count - first);
-            const uint32_t found = detail::primContacts(ctx.stored.data(), pairs + first, n, hits, local.candidates);
-            for (uint32_t h = 0; h < found; ++h) record(local, objects, pairs[first + hits[h].pair], hits[h].contact);
-        }
+        if (local.hits.size() < count) local.hits.resize(count);
+        const uint32_t found =
+            detail::primContacts(ctx.stored.data(), pairs, count, local.hits.data(), local.candidates);
+        for (uint32_t h = 0; h < found; ++h) record(local, objects, pairs[local.hits[h].pair], local.hits[h].contact);
         return;
     }
     // One pair at a time, each first triangle's plane computed once per run of pairs that share
@@ -106,7 +104,7 @@ void narrowPhase(void* user, const Candidate* pairs, uint32_t count) {
         if (k + kAhead < count) __builtin_prefetch(&objects[pairs[k + kAhead].object1].prims[pairs[k + kAhead].prim1]);
         // The broad phase reports each unordered pair once (the filter is for one reporting
         // both orders).
-        if (c.object0 > c.object1 || (c.object0 == c.object1 && c.prim0 >= c.prim1)) continue;
+        if (!detail::inTestOrder(c)) continue;
         ++local.candidates;
         const Prim& a = objects[c.object0].prims[c.prim0];
         if (&a != last) plane = detail::planeOf(a), last = &a;

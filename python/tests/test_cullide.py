@@ -355,9 +355,10 @@ def test_docstrings():
 # reference) must all give the same queries, depth and counters bit for bit, the second run of a
 # list too; and each option must reach the backend (a binding that dropped one would pass the
 # equality alone): the direct path taken on one thread and not when turned off, the second run
-# replayed from the view cache on the tile path and not when the cache is 0 bytes. The fill rule gets its own check: a unit square whose bottom and
-# left edges (in the view) and diagonal run through pixel centres covers each centre once, and the
-# bottom row is in under the bottom-left rule (16 samples) and out under the top-left one (12).
+# replayed from the view cache on the tile path and not when the cache is 0 bytes. The fill rule
+# gets its own check: a unit square whose bottom and left edges (in the view) and diagonal run
+# through pixel centres covers each centre once, and the bottom row is in under the bottom-left
+# rule (16 samples) and out under the top-left one (12).
 def test_cpu_backend_options_same_results():
     rng = np.random.default_rng(7)
     n = 3000
