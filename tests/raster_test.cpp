@@ -1321,6 +1321,70 @@ TEST(Differential, DirectPathSmallTrianglesWithoutAVertexPlane) {
     }
 }
 
+// Trap: the direct path's small forms test edges in 32 bits from the pixel box's corner, exact only
+// while the snapped triangle spans under three pixels; a box clipped to the viewport can be 1 x 1
+// for a triangle thousands of pixels long (one vertex just inside a corner, the others far out
+// but inside the guard band, so not clipped). Taking such a lane as small overflows the sums and
+// loses or adds fragments. Slivers at all four corners among ~1 px triangles (so that two
+// threads take the direct path too), S = 8 and 12, against the scalar path.
+TEST(Differential, DirectPathLongTrianglesWithSmallBoxes) {
+    for (uint64_t seed = 0; seed < 4; ++seed) {
+        std::mt19937_64 rng(seed + 900);
+        auto ticks = [&](int n) { return float(int(rng() % uint64_t(n))) / 1024.0f; };  // exact in float
+        const float W = 16;
+        RandomScene s;
+        RandomScene longOnly;
+        for (int t = 0; t < 7000; ++t) {
+            const float z = 0.1f + 0.8f * ticks(1024);
+            if (t % 7 == 3) {
+                // Vertex a within 1.5 px of a corner, b and c 1000-4000 px beyond its two sides.
+                const int corner = int(rng() % 4);
+                const float sx = corner & 1 ? -1.0f : 1.0f, sy = corner & 2 ? -1.0f : 1.0f;
+                const float cx = corner & 1 ? W : 0, cy = corner & 2 ? W : 0;
+                const float far1 = 1000 + 3 * ticks(1024 * 1000), far2 = 1000 + 3 * ticks(1024 * 1000);
+                const Vec3f a(cx + sx * (0.2f + ticks(1300)), cy + sy * (0.2f + ticks(1300)), z);
+                const Vec3f b(cx - sx * far1, cy + sy * ticks(16 * 1024), z + ticks(64));
+                const Vec3f c(cx + sx * ticks(16 * 1024), cy - sy * far2, z - ticks(64));
+                s.geo.tri(a, b, c);
+                longOnly.geo.tri(a, b, c);
+            } else {
+                const float x = float(1 + rng() % 13) + ticks(1024), y = float(1 + rng() % 13) + ticks(1024);
+                s.geo.tri({x, y, z}, {x + 1.5f - ticks(512), y + ticks(256), z + ticks(64)},
+                          {x + ticks(256), y + 1.5f - ticks(512), z - ticks(64)});
+            }
+        }
+        const uint32_t n = uint32_t(s.geo.triangles.size());
+        s.list.clear();
+        s.list.beginQuery(QueryKind::SamplesPassed);
+        s.list.draw(0, n);
+        s.list.endQuery();
+        longOnly.list.clear();
+        longOnly.list.draw(0, uint32_t(longOnly.geo.triangles.size()));
+        const OrthoView view = windowView(16, 16, seed % 2 ? DepthFormat::float32() : DepthFormat::unorm(24));
+        CpuBackendOptions ref;
+        ref.scalarReference = true;
+        ref.fillRule = seed % 2 ? FillRule::BottomLeft : FillRule::TopLeft;
+        ref.subpixelBits = seed < 2 ? 8 : 12;
+        // Armed: the long triangles cover centres, unclipped (inside the guard band).
+        const Outcome longs = run(longOnly, view, ref);
+        EXPECT_GT(longs.stats.fragments, 50u) << "seed " << seed;
+        EXPECT_EQ(longs.stats.clipped, 0u) << "seed " << seed;
+        const Outcome expected = run(s, view, ref);
+        for (int threads : {1, 2}) {
+            CpuBackendOptions o = ref;
+            o.scalarReference = false;
+            o.threads = threads;
+            auto direct = backendFor(s.geo, view, o);
+            Outcome got;
+            got.results = direct->execute(s.list);
+            got.stats = direct->lastStats();
+            got.depth = direct->readDepth();
+            EXPECT_TRUE(direct->lastRanDirect());
+            expectSame(expected, got, "seed " + std::to_string(seed) + " threads " + std::to_string(threads));
+        }
+    }
+}
+
 // Trap: setup writes each chunk of 1024 triangles into a slot of one record per triangle; a chunk
 // of triangles clipped into several sub-triangles outgrows its slot, spills, and every slot moves
 // (records.cpp). A wrong shift of the record ranges, a spilled chunk's records lost, or a spill

@@ -293,18 +293,39 @@ __attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s,
 }
 
 // The small forms (SmallFrags) of the four lanes of setupInsideEdgeTri4, from its registers: per
-// pixel of the 2 x 2 block at (i0, j0), the edge functions a*i + b*j + c (integers: the pixel
-// loops' values) and the depth (z0 + dzdy*((j + 0.5) - y0)) + dzdx*((i + 0.5) - x0), DepthPlane's
-// operations in its order, so the same fragments and codes. `planeOk`: the lanes whose plane is
+// pixel of the 2 x 2 block at (i0, j0), whether the record's edge functions are all >= 0 there, and
+// the depth (z0 + dzdy*((j + 0.5) - y0)) + dzdx*((i + 0.5) - x0), DepthPlane's operations in its
+// order, so the same fragments and codes as the pixel loops. `planeOk`: the lanes whose plane is
 // these registers' (the others were set up by the scalar step). Returns the lanes given a form (the
 // others get kNotSmall).
-__attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i j0, __m128i j1, const int32_t ea[3][4],
-                                                const int32_t eb[3][4], const __m256i c[3], __m256d x0, __m256d y0,
-                                                __m256d z0, __m256d dzdx, __m256d dzdy, int planeOk,
+//
+// The edge tests in 32 bits, from the block's corner: the record's E(i, j) = floor(c'(i, j) / 2^S)
+// is >= 0 iff c'(i, j) >= 0, where c'(i, j) = 2^S*(a*i + b*j) + c' is the snapped edge function at
+// the centre of pixel (i, j) (EdgeTri). With X = x_k - 2^S*i0 and Y = y_k - 2^S*j0 (the vertex
+// from the corner pixel), c'(i0 + di, j0 + dj) = dx*(half - Y) - dy*(half - X) - exclusive
+// + 2^S*(dx*dj - dy*di): exact in 32 bits for a lane whose snapped extent is under three pixels on
+// both axes (|dx|, |dy| < 3*2^S and |half - X|, |half - Y| < 4*2^S, S <= 12: below 2^30), which
+// every small lane is required to have (a box clipped to the viewport can be small when the
+// triangle is not). The pixel loops' 64-bit sums over 4 pixels x 3 edges were a third of the setup.
+// The depths share their terms: a row's z0 + dzdy*(...) for both pixels of the row, a column's
+// dzdx*(...) for both of the column.
+__attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i j0, __m128i j1, const __m128i x[3],
+                                                const __m128i y[3], const __m128i dx[3], const __m128i dy[3],
+                                                const __m128i exclusive[3], __m128i s, __m128i half, __m256d x0,
+                                                __m256d y0, __m256d z0, __m256d dzdx, __m256d dzdy, int planeOk,
                                                 const SmallOut& small) {
+    static_assert(kMaxSubpixelBits <= 12, "smallForms4's 32-bit edge sums");
     const __m128i one = _mm_set1_epi32(1), two = _mm_set1_epi32(2);
     const __m128i w = _mm_sub_epi32(i1, i0), h = _mm_sub_epi32(j1, j0);  // >= 0: the box holds a centre
-    const int fits = _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(_mm_cmpgt_epi32(two, w), _mm_cmpgt_epi32(two, h))));
+    const __m128i minx = _mm_min_epi32(_mm_min_epi32(x[0], x[1]), x[2]);
+    const __m128i maxx = _mm_max_epi32(_mm_max_epi32(x[0], x[1]), x[2]);
+    const __m128i miny = _mm_min_epi32(_mm_min_epi32(y[0], y[1]), y[2]);
+    const __m128i maxy = _mm_max_epi32(_mm_max_epi32(y[0], y[1]), y[2]);
+    const __m128i three = _mm_sll_epi32(_mm_set1_epi32(3), s);  // three pixels in fixed point
+    const __m128i narrow = _mm_and_si128(_mm_cmpgt_epi32(three, _mm_sub_epi32(maxx, minx)),
+                                         _mm_cmpgt_epi32(three, _mm_sub_epi32(maxy, miny)));
+    const __m128i fitsBox = _mm_and_si128(_mm_cmpgt_epi32(two, w), _mm_cmpgt_epi32(two, h));
+    const int fits = _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(fitsBox, narrow)));
     const int smallLanes = fits & planeOk;
     SmallFrags* const out = small.out;
     if (smallLanes == 0) {
@@ -314,26 +335,37 @@ __attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i 
     const int wide = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(w, one)));
     const int tall = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(h, one)));
     const int valid[4] = {15, wide, tall, wide & tall};  // per pixel, the lanes whose box holds it
-    __m256i a[3], b[3];  // the edge coefficients in 64-bit lanes
+    // Per pixel (di, dj) = (p & 1, p >> 1), the OR of the three edges' c': its sign bit is set
+    // where some edge is negative.
+    // The corner pixel's centre in fixed point; half - X = cx - x_k, half - Y = cy - y_k.
+    const __m128i cx = _mm_add_epi32(_mm_sll_epi32(i0, s), half), cy = _mm_add_epi32(_mm_sll_epi32(j0, s), half);
+    __m128i any[4] = {_mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128()};
     for (int k = 0; k < 3; ++k) {
-        a[k] = _mm256_cvtepi32_epi64(_mm_load_si128(reinterpret_cast<const __m128i*>(ea[k])));
-        b[k] = _mm256_cvtepi32_epi64(_mm_load_si128(reinterpret_cast<const __m128i*>(eb[k])));
+        const __m128i hx = _mm_sub_epi32(cx, x[k]), hy = _mm_sub_epi32(cy, y[k]);
+        const __m128i e0 =
+            _mm_sub_epi32(_mm_sub_epi32(_mm_mullo_epi32(dx[k], hy), _mm_mullo_epi32(dy[k], hx)), exclusive[k]);
+        const __m128i e1 = _mm_sub_epi32(e0, _mm_sll_epi32(dy[k], s));
+        const __m128i e2 = _mm_add_epi32(e0, _mm_sll_epi32(dx[k], s));
+        const __m128i e3 = _mm_sub_epi32(e2, _mm_sll_epi32(dy[k], s));
+        any[0] = _mm_or_si128(any[0], e0);
+        any[1] = _mm_or_si128(any[1], e1);
+        any[2] = _mm_or_si128(any[2], e2);
+        any[3] = _mm_or_si128(any[3], e3);
     }
+    const __m256d halfd = _mm256_set1_pd(0.5);
+    const __m256d col[2] = {
+        _mm256_mul_pd(dzdx, _mm256_sub_pd(_mm256_add_pd(_mm256_cvtepi32_pd(i0), halfd), x0)),
+        _mm256_mul_pd(dzdx, _mm256_sub_pd(_mm256_add_pd(_mm256_cvtepi32_pd(_mm_add_epi32(i0, one)), halfd), x0))};
+    const __m256d row[2] = {
+        _mm256_add_pd(z0, _mm256_mul_pd(dzdy, _mm256_sub_pd(_mm256_add_pd(_mm256_cvtepi32_pd(j0), halfd), y0))),
+        _mm256_add_pd(
+            z0,
+            _mm256_mul_pd(dzdy, _mm256_sub_pd(_mm256_add_pd(_mm256_cvtepi32_pd(_mm_add_epi32(j0, one)), halfd), y0)))};
     __m128 codes[4];
     int inside[4];
     for (int p = 0; p < 4; ++p) {
-        const __m128i i = p & 1 ? _mm_add_epi32(i0, one) : i0, j = p & 2 ? _mm_add_epi32(j0, one) : j0;
-        const __m256i i64 = _mm256_cvtepi32_epi64(i), j64 = _mm256_cvtepi32_epi64(j);
-        __m256i any = _mm256_setzero_si256();
-        for (int k = 0; k < 3; ++k)
-            any = _mm256_or_si256(
-                any,
-                _mm256_add_epi64(_mm256_add_epi64(c[k], _mm256_mul_epi32(a[k], i64)), _mm256_mul_epi32(b[k], j64)));
-        inside[p] = ~_mm256_movemask_pd(_mm256_castsi256_pd(any)) & valid[p];
-        const __m256d half = _mm256_set1_pd(0.5);
-        const __m256d cx = _mm256_add_pd(_mm256_cvtepi32_pd(i), half), cy = _mm256_add_pd(_mm256_cvtepi32_pd(j), half);
-        const __m256d z = _mm256_add_pd(_mm256_add_pd(z0, _mm256_mul_pd(dzdy, _mm256_sub_pd(cy, y0))),
-                                        _mm256_mul_pd(dzdx, _mm256_sub_pd(cx, x0)));
+        inside[p] = ~_mm_movemask_ps(_mm_castsi128_ps(any[p])) & valid[p];
+        const __m256d z = _mm256_add_pd(row[p >> 1], col[p & 1]);
         codes[p] =
             _mm_castsi128_ps(small.isFloat ? clampEncode4<true>(z, small.bits) : clampEncode4<false>(z, small.bits));
     }
@@ -391,31 +423,17 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
     const __m128i i1 = _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxx, half), s), _mm_set1_epi32(params.width - 1));
     const __m128i j0 = _mm_max_epi32(_mm_sub_epi32(zero, _mm_sra_epi32(_mm_sub_epi32(half, miny), s)), zero);
     const __m128i j1 = _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxy, half), s), _mm_set1_epi32(params.height - 1));
-    alignas(16) int32_t box[4][4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(box[0]), i0);
-    _mm_store_si128(reinterpret_cast<__m128i*>(box[1]), i1);
-    _mm_store_si128(reinterpret_cast<__m128i*>(box[2]), j0);
-    _mm_store_si128(reinterpret_cast<__m128i*>(box[3]), j1);
-    // The edges, as makeEdgeTri; the products in 64 bits (_mm256_mul_epi32 multiplies the low 32
-    // bits of each lane, signed: every factor fits them).
+    // The edges' differences and fill-rule offsets, as makeEdgeTri.
     const bool bottomLeft = params.fillRule == FillRule::BottomLeft;
-    alignas(16) int32_t ea[3][4], eb[3][4];
-    alignas(32) int64_t ec[3][4];
-    __m256i c64[3];  // for the small forms
+    __m128i edx[3], edy[3], excl[3];
     for (int k = 0; k < 3; ++k) {
         const int n = k == 2 ? 0 : k + 1;
-        const __m128i dx = _mm_sub_epi32(x[n], x[k]), dy = _mm_sub_epi32(y[n], y[k]);
-        const __m128i along = bottomLeft ? _mm_cmpgt_epi32(dx, zero) : _mm_cmpgt_epi32(zero, dx);
+        edx[k] = _mm_sub_epi32(x[n], x[k]);
+        edy[k] = _mm_sub_epi32(y[n], y[k]);
+        const __m128i along = bottomLeft ? _mm_cmpgt_epi32(edx[k], zero) : _mm_cmpgt_epi32(zero, edx[k]);
         const __m128i inclusive =
-            _mm_or_si128(_mm_cmpgt_epi32(zero, dy), _mm_and_si128(_mm_cmpeq_epi32(dy, zero), along));
-        const __m128i exclusive = _mm_andnot_si128(inclusive, _mm_set1_epi32(1));
-        const __m256i p = _mm256_mul_epi32(_mm256_cvtepi32_epi64(dx), _mm256_cvtepi32_epi64(_mm_sub_epi32(half, y[k])));
-        const __m256i q = _mm256_mul_epi32(_mm256_cvtepi32_epi64(dy), _mm256_cvtepi32_epi64(_mm_sub_epi32(half, x[k])));
-        const __m256i c = _mm256_sub_epi64(_mm256_sub_epi64(p, q), _mm256_cvtepi32_epi64(exclusive));
-        _mm_store_si128(reinterpret_cast<__m128i*>(ea[k]), _mm_sub_epi32(zero, dy));
-        _mm_store_si128(reinterpret_cast<__m128i*>(eb[k]), dx);
-        c64[k] = floorShift4(c, s, rest);
-        _mm256_store_si256(reinterpret_cast<__m256i*>(ec[k]), c64[k]);
+            _mm_or_si128(_mm_cmpgt_epi32(zero, edy[k]), _mm_and_si128(_mm_cmpeq_epi32(edy[k], zero), along));
+        excl[k] = _mm_andnot_si128(inclusive, _mm_set1_epi32(1));
     }
     // The depth plane, as planeFrom, in the triangle's own vertex order.
     const __m256d x0 = wx[0], y0 = wy[0], z0 = wz[0];
@@ -434,7 +452,28 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
                                      _mm256_and_pd(finiteX, finiteY));
     const int planeOk = _mm256_movemask_pd(ok);
     // The lanes with a small form need no record (the direct path reads only the others').
-    const int formed = small ? smallForms4(i0, i1, j0, j1, ea, eb, c64, x0, y0, z0, dzdx, dzdy, planeOk, *small) : 0;
+    const int formed =
+        small ? smallForms4(i0, i1, j0, j1, x, y, edx, edy, excl, s, half, x0, y0, z0, dzdx, dzdy, planeOk, *small) : 0;
+    if (formed == 15) return;
+    // The records of the other lanes: the box, and the edges' constants in 64 bits
+    // (_mm256_mul_epi32 multiplies the low 32 bits of each lane, signed: every factor fits them).
+    alignas(16) int32_t box[4][4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[0]), i0);
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[1]), i1);
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[2]), j0);
+    _mm_store_si128(reinterpret_cast<__m128i*>(box[3]), j1);
+    alignas(16) int32_t ea[3][4], eb[3][4];
+    alignas(32) int64_t ec[3][4];
+    for (int k = 0; k < 3; ++k) {
+        const __m256i p =
+            _mm256_mul_epi32(_mm256_cvtepi32_epi64(edx[k]), _mm256_cvtepi32_epi64(_mm_sub_epi32(half, y[k])));
+        const __m256i q =
+            _mm256_mul_epi32(_mm256_cvtepi32_epi64(edy[k]), _mm256_cvtepi32_epi64(_mm_sub_epi32(half, x[k])));
+        const __m256i c = _mm256_sub_epi64(_mm256_sub_epi64(p, q), _mm256_cvtepi32_epi64(excl[k]));
+        _mm_store_si128(reinterpret_cast<__m128i*>(ea[k]), _mm_sub_epi32(zero, edy[k]));
+        _mm_store_si128(reinterpret_cast<__m128i*>(eb[k]), edx[k]);
+        _mm256_store_si256(reinterpret_cast<__m256i*>(ec[k]), floorShift4(c, s, rest));
+    }
     alignas(32) double gx[4], gy[4];
     _mm256_store_pd(gx, dzdx);
     _mm256_store_pd(gy, dzdy);
