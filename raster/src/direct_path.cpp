@@ -4,6 +4,7 @@
 #include "cullide/parallel.h"
 
 #include <algorithm>
+#include <cstring>
 
 namespace cullide::raster::detail {
 
@@ -79,6 +80,22 @@ struct Direct {
         uint32_t n = 0, clips = 0;
         uint64_t rejected = 0, zeroArea = 0;
         for (uint32_t t = b.lo; t < b.hi; ++t) {
+            // Eight one-record triangles starting a batch (the common case of small triangles):
+            // two whole batches, without the flags' bookkeeping.
+            constexpr uint64_t kBytes = 0x0101010101010101;
+            uint64_t h8 = 0;
+            if (n % 4 == 0 && t + 8 <= b.hi) std::memcpy(&h8, &b.hint[t - b.lo], 8);
+            if ((h8 & kBytes * (kHintOne | kHintClip)) == kBytes * kHintOne) {
+                for (uint32_t q = 0; q < 8; ++q) {
+                    InsideBatch& batch = b.batch[n / 4 + q / 4];
+                    const Triangle& tri = g.triangles[t + q];
+                    for (int k = 0; k < 3; ++k) batch.v[k][q % 4] = tri[k];
+                    batch.clockwise[q % 4] = h8 >> (8 * q) & kHintCw ? -1 : 0;
+                }
+                n += 8;
+                t += 7;
+                continue;
+            }
             // A triangle without a record is written to the next lane too, which the next one overwrites.
             const uint8_t h = b.hint[t - b.lo];
             InsideBatch& batch = b.batch[n / 4];
