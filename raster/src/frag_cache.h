@@ -19,9 +19,12 @@ namespace cullide::raster::detail {
 // A group is up to four consecutive pixels of one row.
 struct FragGroup {
     uint32_t pixel;  // depth-buffer index of lane 0 (viewports have at most kMaxViewportSide^2 = 2^28 pixels)
-    uint32_t lanes;  // bit l set: pixel + l is a fragment
+    uint32_t lanes;  // bit l set: pixel + l is a fragment (kGroupLanes); kWholeGroup: see below
     uint32_t z[4];  // incoming depth codes, per lane
 };
+// FragGroup::lanes: the four lane bits, and a flag set when all four pixels lie in the range the
+// group was recorded for (the recording thread's: the AVX2 replay reads and writes them whole).
+inline constexpr uint32_t kGroupLanes = 15, kWholeGroup = 16;
 static_assert(uint64_t(kMaxViewportSide) * uint64_t(kMaxViewportSide) <= uint64_t(UINT32_MAX),
               "FragGroup::pixel holds a depth-buffer index");
 inline constexpr size_t kFragCap = size_t(1) << 16;  // groups per thread and tile; draws beyond are not recorded

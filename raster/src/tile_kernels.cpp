@@ -116,6 +116,16 @@ __attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x
     const __m256d z0 = _mm256_set1_pd(p.z0), dzdx = _mm256_set1_pd(p.dzdx), dzdy = _mm256_set1_pd(p.dzdy);
     const __m256d py0 = _mm256_set1_pd(p.y0);
     const auto laneMask = [](int bits4) { return _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[bits4])); };
+    // A row's pixels of the block, read and written whole (the test's verdict blended in): both lie
+    // in the clipped range, this thread's, when the record is wide, else only the first. Masked
+    // stores are microcoded on AMD's Zen 1 (family 23).
+    const auto loadRow = [wide](const uint32_t* d) {
+        return wide ? _mm_loadl_epi64(reinterpret_cast<const __m128i*>(d)) : _mm_cvtsi32_si128(int(*d));
+    };
+    const auto storeRow = [wide](uint32_t* d, __m128i v) {
+        if (wide) _mm_storel_epi64(reinterpret_cast<__m128i*>(d), v);
+        else *d = uint32_t(_mm_cvtsi128_si32(v));
+    };
     uint64_t frag = 0, pass = 0;
     for (int j = y0; j <= y1; j += 2, e[0] = _mm256_add_epi64(e[0], down[0]), e[1] = _mm256_add_epi64(e[1], down[1]),
              e[2] = _mm256_add_epi64(e[2], down[2])) {
@@ -144,16 +154,16 @@ __attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x
                 _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), _mm_srli_si128(incoming, 8));
             }
         }
-        const __m128i stored =
-            _mm_unpacklo_epi64(_mm_maskload_epi32(reinterpret_cast<const int*>(d0), laneMask(top)),
-                               _mm_maskload_epi32(reinterpret_cast<const int*>(d1), laneMask(bottom)));
+        const __m128i stored = _mm_unpacklo_epi64(loadRow(d0), loadRow(d1));
         const __m128i ok = depthTest4<F>(incoming, stored, laneMask(inside));
         const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
         frag += uint64_t(std::popcount(unsigned(inside)));
         pass += uint64_t(std::popcount(unsigned(okBits)));
         if (mask && okBits != 0) {
-            _mm_maskstore_epi32(reinterpret_cast<int*>(d0), _mm_and_si128(ok, laneMask(3)), incoming);
-            _mm_maskstore_epi32(reinterpret_cast<int*>(d1), _mm_srli_si128(ok, 8), _mm_srli_si128(incoming, 8));
+            // d1 first: when it is d0 (one row), its lanes failed (not valid) and d0's write wins.
+            const __m128i written = _mm_blendv_epi8(stored, incoming, ok);
+            storeRow(d1, _mm_srli_si128(written, 8));
+            storeRow(d0, written);
         }
     }
     fragments += frag;
@@ -197,16 +207,24 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
             if constexpr (Record) {
                 FragGroup* g = rec++;
                 g->pixel = uint32_t(size_t(j) * stride + size_t(i));
-                g->lanes = uint32_t(inside);
+                g->lanes = uint32_t(inside) | (valid == 15 ? kWholeGroup : 0);
                 _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), incoming);
             }
             const __m128i lanes = _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[inside]));
-            const __m128i stored = _mm_maskload_epi32(reinterpret_cast<const int*>(d + i), lanes);
+            // Four pixels in the clipped range (this thread's) read and written whole, the verdict
+            // blended in (masked stores are microcoded on Zen 1); the row's last group masked.
+            const bool whole = valid == 15;
+            int* const p = reinterpret_cast<int*>(d + i);
+            const __m128i stored =
+                whole ? _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)) : _mm_maskload_epi32(p, lanes);
             const __m128i ok = depthTest4<F>(incoming, stored, lanes);
             const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
             frag += uint64_t(std::popcount(unsigned(inside)));
             pass += uint64_t(std::popcount(unsigned(okBits)));
-            if (mask && okBits != 0) _mm_maskstore_epi32(reinterpret_cast<int*>(d + i), ok, incoming);
+            if (mask && okBits != 0) {
+                if (whole) _mm_storeu_si128(reinterpret_cast<__m128i*>(p), _mm_blendv_epi8(stored, incoming, ok));
+                else _mm_maskstore_epi32(p, ok, incoming);
+            }
         }
     }
     fragments += frag;
@@ -307,14 +325,22 @@ __attribute__((target("avx2"))) void replayFragmentsAvx2(const FragGroup* g, con
                                                          bool mask, uint64_t& fragments, uint64_t& passed) {
     uint64_t frag = 0, pass = 0;
     for (; g != end; ++g) {
-        const __m128i lanes = _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[g->lanes]));
+        const uint32_t bits = g->lanes & kGroupLanes;
+        const __m128i lanes = _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[bits]));
         const __m128i incoming = _mm_loadu_si128(reinterpret_cast<const __m128i*>(g->z));
         int* d = reinterpret_cast<int*>(depth + g->pixel);
-        const __m128i ok = depthTest4<F>(incoming, _mm_maskload_epi32(d, lanes), lanes);
+        // A whole group's four pixels are read and written whole (rasterizeInTileAvx2).
+        const bool whole = (g->lanes & kWholeGroup) != 0;
+        const __m128i stored =
+            whole ? _mm_loadu_si128(reinterpret_cast<const __m128i*>(d)) : _mm_maskload_epi32(d, lanes);
+        const __m128i ok = depthTest4<F>(incoming, stored, lanes);
         const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
-        frag += uint64_t(std::popcount(g->lanes));
+        frag += uint64_t(std::popcount(bits));
         pass += uint64_t(std::popcount(unsigned(okBits)));
-        if (mask && okBits != 0) _mm_maskstore_epi32(d, ok, incoming);
+        if (mask && okBits != 0) {
+            if (whole) _mm_storeu_si128(reinterpret_cast<__m128i*>(d), _mm_blendv_epi8(stored, incoming, ok));
+            else _mm_maskstore_epi32(d, ok, incoming);
+        }
     }
     fragments += frag;
     passed += pass;

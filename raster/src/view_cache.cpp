@@ -84,7 +84,7 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
         size_t count = 0;  // sized exactly: no spare capacity kept
         for (size_t p = 0; p < n; ++p)
             for (uint32_t g = capture.groupBegin[p]; g < capture.groupEnd[p]; ++g)
-                count += size_t(std::popcount(groups[g].lanes));
+                count += size_t(std::popcount(groups[g].lanes & kGroupLanes));
         out.frag.reserve(count);
         for (size_t p = 0; p < n; ++p)
             appendGroups(groups + capture.groupBegin[p], groups + capture.groupEnd[p], triangleOf(recs[p]),
