@@ -11,6 +11,8 @@
 #include "test_util.h"
 #include "window_geometry.h"
 
+#include "../raster/src/depth_simd.h"
+
 #include <gtest/gtest.h>
 #include <oneapi/tbb/global_control.h>
 
@@ -131,6 +133,60 @@ TEST(RasterRules, ClampAndFloatEncoding) {
     const double z = 0.1;
     EXPECT_EQ(encodeDepth(z, DepthFormat::float32()), std::bit_cast<uint32_t>(0.1f));
 }
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+// Trap: the fast paths' four-lane clamp and encoding (depth_simd.h) drifting from rule 7's scalar
+// one: a tie taken the wrong way, r +- 1/2 decided on the wrong side, the clamp's max/min
+// letting NaN or -0 through, the carry of f + 1 lost at 2^n (z = 1, n = 32). Midpoints a few ulps
+// either side, tiny z (a < 1), out-of-range and non-finite z, every bit count and float; each value
+// in each lane.
+__attribute__((target("avx2"))) void encode4(const double z[4], const DepthFormat& f, uint32_t out[4]) {
+    const __m256d v = _mm256_loadu_pd(z);
+    const __m128i codes = f.kind == DepthFormat::Kind::Float32 ? raster::detail::clampEncode4<true>(v, f.bits)
+                                                               : raster::detail::clampEncode4<false>(v, f.bits);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out), codes);
+}
+
+TEST(RasterRules, FourLaneEncodingMatchesTheRule) {
+    if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "no AVX2 on this CPU";
+    std::mt19937_64 rng(4242);
+    std::vector<double> zs = {0.0,
+                              -0.0,
+                              1.0,
+                              0.5,
+                              -1.0,
+                              2.0,
+                              NAN,
+                              -NAN,
+                              INFINITY,
+                              -INFINITY,
+                              std::nextafter(1.0, 0.0),
+                              std::nextafter(0.0, 1.0),
+                              0x1p-40,
+                              1e-300};
+    for (int i = 0; i < 4000; ++i) {
+        const int n = 8 + int(rng() % 25);
+        const double c = std::ldexp(1.0, n) - 1, k = double(rng() % uint64_t(c));
+        double z = (k + 0.5) / c;
+        const int steps = int(rng() % 7) - 3;
+        for (int t = 0; t < std::abs(steps); ++t) z = std::nextafter(z, steps > 0 ? 2.0 : -1.0);
+        if (i % 4 == 3) z = std::ldexp(z, -int(rng() % 40));
+        if (i % 16 == 5) z = double(rng() >> 11) * 0x1p-53 * 3 - 1;  // [-1, 2)
+        zs.push_back(z);
+    }
+    std::vector<DepthFormat> formats = {DepthFormat::float32()};
+    for (int n = 8; n <= 32; ++n) formats.push_back(DepthFormat::unorm(n));
+    for (const DepthFormat& f : formats)
+        for (size_t i = 0; i < zs.size(); ++i) {
+            const size_t j = (i * 7 + 3) % zs.size();
+            const double lanes[4] = {zs[i], zs[j], zs[(i + 1) % zs.size()], zs[(j + 5) % zs.size()]};
+            uint32_t got[4];
+            encode4(lanes, f, got);
+            for (int l = 0; l < 4; ++l)
+                ASSERT_EQ(got[l], encodeDepth(lanes[l], f)) << f.name() << " z=" << lanes[l] << " lane " << l;
+        }
+}
+#endif
 
 // Trap: the edge classification inverted, which breaks the "exactly one owner" rule.
 TEST(RasterRules, InclusiveEdges) {
