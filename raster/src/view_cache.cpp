@@ -54,12 +54,15 @@ TileBounds boundsOf(const TileGrid& grid, size_t tile, int width, int height) {
 // The fragments of groups [g, e) of a record of triangle t, appended to `out` (tile from (x0, y0)).
 void appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t width, uint32_t x0, uint32_t y0,
                   const FragLayout& layout, TileFragments& out) {
-    for (; g != e; ++g)
+    // A group's lanes lie in one row (every kernel opens a group per row): one division a group
+    // (per fragment, they were most of this loop).
+    for (; g != e; ++g) {
+        const uint32_t y = g->pixel / width, x = g->pixel - y * width;
         for (uint32_t l = 0; l < 4; ++l) {
             if (!(g->lanes >> l & 1)) continue;
-            const uint32_t pixel = g->pixel + l, x = pixel % width, y = pixel / width;
-            out.frag.push_back(layout.pack(t, g->z[l], x - x0, y - y0));
+            out.frag.push_back(layout.pack(t, g->z[l], x + l - x0, y - y0));
         }
+    }
 }
 
 }  // namespace
