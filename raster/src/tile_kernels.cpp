@@ -98,7 +98,7 @@ __attribute__((target("avx2"))) inline __m128i depthTest4(__m128i incoming, __m1
 // (DepthPlane::row, then at), so the same fragments, depths and counts; recorded as one group per
 // row (replays apply the same fragments in the same order).
 template <DepthFunc F, bool Float, bool Record>
-__attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x0, int y0, int x1, int y1,
+__attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x0, int y0, int x1, int y1, int bx1,
                                                          uint32_t* depth, size_t stride, bool mask, int bits,
                                                          uint64_t& fragments, uint64_t& passed, FragGroup*& rec) {
     const bool wide = x1 > x0;
@@ -116,14 +116,17 @@ __attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x
     const __m256d z0 = _mm256_set1_pd(p.z0), dzdx = _mm256_set1_pd(p.dzdx), dzdy = _mm256_set1_pd(p.dzdy);
     const __m256d py0 = _mm256_set1_pd(p.y0);
     const auto laneMask = [](int bits4) { return _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[bits4])); };
-    // A row's pixels of the block, read and written whole (the test's verdict blended in): both lie
-    // in the clipped range, this thread's, when the record is wide, else only the first. Masked
-    // stores are microcoded on AMD's Zen 1 (family 23).
-    const auto loadRow = [wide](const uint32_t* d) {
-        return wide ? _mm_loadl_epi64(reinterpret_cast<const __m128i*>(d)) : _mm_cvtsi32_si128(int(*d));
+    // A row's two pixels of the block, read and written whole (the test's verdict blended in) when
+    // both lie in the tile (this thread's: bx1 is its last column), else only the first. Masked
+    // stores are microcoded on AMD's Zen 1 (family 23). A group is flagged whole (its replay reads
+    // and writes four pixels) when all four lie in the tile.
+    const bool pair = x0 + 1 <= bx1;
+    const uint32_t wholeFlag = x0 + 3 <= bx1 ? kWholeGroup : 0;
+    const auto loadRow = [pair](const uint32_t* d) {
+        return pair ? _mm_loadl_epi64(reinterpret_cast<const __m128i*>(d)) : _mm_cvtsi32_si128(int(*d));
     };
-    const auto storeRow = [wide](uint32_t* d, __m128i v) {
-        if (wide) _mm_storel_epi64(reinterpret_cast<__m128i*>(d), v);
+    const auto storeRow = [pair](uint32_t* d, __m128i v) {
+        if (pair) _mm_storel_epi64(reinterpret_cast<__m128i*>(d), v);
         else *d = uint32_t(_mm_cvtsi128_si32(v));
     };
     uint64_t frag = 0, pass = 0;
@@ -144,13 +147,13 @@ __attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x
             if (top) {
                 FragGroup* g = rec++;
                 g->pixel = uint32_t(size_t(j) * stride + size_t(x0));
-                g->lanes = uint32_t(top);
+                g->lanes = uint32_t(top) | wholeFlag;
                 _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), incoming);
             }
             if (bottom) {
                 FragGroup* g = rec++;
                 g->pixel = uint32_t(size_t(j + 1) * stride + size_t(x0));
-                g->lanes = uint32_t(bottom);
+                g->lanes = uint32_t(bottom) | wholeFlag;
                 _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), _mm_srli_si128(incoming, 8));
             }
         }
@@ -179,8 +182,8 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     if (x0 > x1 || y0 > y1) return;
     // Records one or two pixels wide: two rows at a time in one vector.
     if (x1 - x0 < 2)
-        return rasterizeNarrowAvx2<F, Float, Record>(t, x0, y0, x1, y1, depth, stride, mask, bits, fragments, passed,
-                                                     rec);
+        return rasterizeNarrowAvx2<F, Float, Record>(t, x0, y0, x1, y1, bx1, depth, stride, mask, bits, fragments,
+                                                     passed, rec);
     const int64_t a0 = t.a[0], a1 = t.a[1], a2 = t.a[2], b0 = t.b[0], b1 = t.b[1], b2 = t.b[2];
     const __m256i off0 = _mm256_set_epi64x(3 * a0, 2 * a0, a0, 0), step0 = _mm256_set1_epi64x(4 * a0);
     const __m256i off1 = _mm256_set_epi64x(3 * a1, 2 * a1, a1, 0), step1 = _mm256_set1_epi64x(4 * a1);
@@ -204,16 +207,17 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
             const __m256d z = _mm256_add_pd(
                 row, _mm256_mul_pd(dzdx, _mm256_sub_pd(_mm256_add_pd(_mm256_set1_pd(double(i)), centres), planeX0)));
             const __m128i incoming = clampEncode4<Float>(z, bits);
+            // Four pixels in the tile (this thread's: bx1 is its last column) read and written
+            // whole, the verdict blended in (masked stores are microcoded on Zen 1); a group at
+            // the tile's right edge masked.
+            const bool whole = i + 3 <= bx1;
             if constexpr (Record) {
                 FragGroup* g = rec++;
                 g->pixel = uint32_t(size_t(j) * stride + size_t(i));
-                g->lanes = uint32_t(inside) | (valid == 15 ? kWholeGroup : 0);
+                g->lanes = uint32_t(inside) | (whole ? kWholeGroup : 0);
                 _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), incoming);
             }
             const __m128i lanes = _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[inside]));
-            // Four pixels in the clipped range (this thread's) read and written whole, the verdict
-            // blended in (masked stores are microcoded on Zen 1); the row's last group masked.
-            const bool whole = valid == 15;
             int* const p = reinterpret_cast<int*>(d + i);
             const __m128i stored =
                 whole ? _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)) : _mm_maskload_epi32(p, lanes);
