@@ -51,19 +51,28 @@ TileBounds boundsOf(const TileGrid& grid, size_t tile, int width, int height) {
     return {x0, y0, std::min(x0 + ts, width) - 1, std::min(y0 + ts, height) - 1};
 }
 
-// The fragments of groups [g, e) of a record of triangle t, appended to `out` (tile from (x0, y0)).
-void appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t width, uint32_t x0, uint32_t y0,
-                  const FragLayout& layout, TileFragments& out) {
-    // A group's lanes lie in one row (every kernel opens a group per row): one division a group
-    // (per fragment, they were most of this loop).
+// The fragments of groups [g, e) of a record of triangle t (tile from (x0, y0)), written from
+// `dst` on with room for four a group; returns their end. A group's lanes lie in one row (every
+// kernel opens a group per row): one division a group (per fragment, they were most of this
+// loop), and each lane written whether it is a fragment or not, the end advanced by its bit.
+uint64_t* appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t width, uint32_t x0, uint32_t y0,
+                       const FragLayout& layout, uint64_t* dst) {
+    const int zShift = layout.zShift();
+    const uint64_t tri = layout.pack(t, 0, 0, 0);
     for (; g != e; ++g) {
         const uint32_t y = g->pixel / width, x = g->pixel - y * width;
+        const uint64_t at = tri | layout.pack(0, 0, x - x0, y - y0);  // + l: the lane's x, within the tile
         for (uint32_t l = 0; l < 4; ++l) {
-            if (!(g->lanes >> l & 1)) continue;
-            out.frag.push_back(layout.pack(t, g->z[l], x + l - x0, y - y0));
+            *dst = (at + l) | uint64_t(g->z[l]) << zShift;
+            dst += g->lanes >> l & 1;
         }
     }
+    return dst;
 }
+
+// Fragments per lane bits (FragGroup::lanes & kGroupLanes): this file is built without POPCNT,
+// where std::popcount is a call.
+constexpr uint8_t kLaneCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
 
 }  // namespace
 
@@ -84,14 +93,16 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
     };
     if (capture.ok && capture.groupBegin.size() == n) {
         const FragGroup* groups = cache.groups.data();
-        size_t count = 0;  // sized exactly: no spare capacity kept
+        size_t count = 0;  // sized exactly but for the slot appendGroups writes past the last
         for (size_t p = 0; p < n; ++p)
             for (uint32_t g = capture.groupBegin[p]; g < capture.groupEnd[p]; ++g)
-                count += size_t(std::popcount(groups[g].lanes & kGroupLanes));
-        out.frag.reserve(count);
+                count += kLaneCount[groups[g].lanes & kGroupLanes];
+        out.frag.resize(count + 1);
+        uint64_t* dst = out.frag.data();
         for (size_t p = 0; p < n; ++p)
-            appendGroups(groups + capture.groupBegin[p], groups + capture.groupEnd[p], triangleOf(recs[p]),
-                         uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), layout, out);
+            dst = appendGroups(groups + capture.groupBegin[p], groups + capture.groupEnd[p], triangleOf(recs[p]),
+                               uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), layout, dst);
+        out.frag.resize(count);
         return;
     }
     // A record's groups in a tile: at most one per pixel of the tile.
@@ -103,8 +114,11 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
         FragGroup* w = scratch.data();
         table.record[size_t(DepthFunc::Always)](plain.records[recs[p]], b.x0, b.y0, b.x1, b.y1, depth, size_t(width),
                                                 false, bits, fragments, passed, w);
-        appendGroups(scratch.data(), w, triangleOf(recs[p]), uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), layout,
-                     out);
+        const size_t at = out.frag.size();
+        out.frag.resize(at + 4 * size_t(w - scratch.data()));
+        const uint64_t* end = appendGroups(scratch.data(), w, triangleOf(recs[p]), uint32_t(width), uint32_t(b.x0),
+                                           uint32_t(b.y0), layout, out.frag.data() + at);
+        out.frag.resize(size_t(end - out.frag.data()));
     }
     out.frag.shrink_to_fit();
 }
