@@ -370,18 +370,20 @@ __attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i 
             _mm_castsi128_ps(small.isFloat ? clampEncode4<true>(z, small.bits) : clampEncode4<false>(z, small.bits));
     }
     _MM_TRANSPOSE4_PS(codes[0], codes[1], codes[2], codes[3]);  // now per lane: its four pixels
+    // The per-pixel lane masks transposed to per-lane pixel masks: bit l of a mask spread to byte
+    // l, pixel p's shifted by p; byte l then holds lane l's four pixels.
+    static constexpr uint32_t kSpread[16] = {0x00000000, 0x00000001, 0x00000100, 0x00000101, 0x00010000, 0x00010001,
+                                             0x00010100, 0x00010101, 0x01000000, 0x01000001, 0x01000100, 0x01000101,
+                                             0x01010000, 0x01010001, 0x01010100, 0x01010101};
+    const uint32_t perLane =
+        kSpread[inside[0]] | kSpread[inside[1]] << 1 | kSpread[inside[2]] << 2 | kSpread[inside[3]] << 3;
     alignas(16) int32_t ci[4], cj[4];
     _mm_store_si128(reinterpret_cast<__m128i*>(ci), i0);
     _mm_store_si128(reinterpret_cast<__m128i*>(cj), j0);
-    for (int l = 0; l < 4; ++l) {
+    for (int l = 0; l < 4; ++l) {  // a lane without a form is marked; its other fields are not read
         SmallFrags& f = out[l];
-        if (!(smallLanes >> l & 1)) {
-            f.lanes = kNotSmall;
-            continue;
-        }
         f.pixel = uint32_t(size_t(cj[l]) * small.stride + size_t(ci[l]));
-        f.lanes = uint32_t((inside[0] >> l & 1) | (inside[1] >> l & 1) << 1 | (inside[2] >> l & 1) << 2 |
-                           (inside[3] >> l & 1) << 3);
+        f.lanes = smallLanes >> l & 1 ? perLane >> (8 * l) & 15 : kNotSmall;
         _mm_storeu_ps(reinterpret_cast<float*>(f.z), codes[l]);
     }
     return smallLanes;
