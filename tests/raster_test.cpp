@@ -974,6 +974,24 @@ void expectSame(const Outcome& a, const Outcome& b, const std::string& what) {
     }
 }
 
+// The direct path on one and two threads against `expected` (the scalar path's outcome), each run
+// checked to have taken it.
+void expectDirectOnThreads(const RandomScene& s, const OrthoView& view, const CpuBackendOptions& ref,
+                           const Outcome& expected, const std::string& what) {
+    for (int threads : {1, 2}) {
+        CpuBackendOptions o = ref;
+        o.scalarReference = false;
+        o.threads = threads;
+        auto direct = backendFor(s.geo, view, o);
+        Outcome got;
+        got.results = direct->execute(s.list);
+        got.stats = direct->lastStats();
+        got.depth = direct->readDepth();
+        EXPECT_TRUE(direct->lastRanDirect()) << what << " threads " << threads;
+        expectSame(expected, got, what + " threads " + std::to_string(threads));
+    }
+}
+
 // Trap: tiling, binning, edge stepping, galloping search, tile clipping, query bookkeeping or the
 // four-pixel AVX2 loop (lane masks, unsigned compares, the unorm encoding in vector doubles)
 // disagreeing with the obvious per-pixel loop; for every format, both fill rules, several
@@ -1359,21 +1377,8 @@ TEST(Differential, DirectPathSmallTrianglesWithoutAVertexPlane) {
         ref.subpixelBits = 1 + int(seed % 2);  // coarse: snapping moves a vertex by up to 1/4 or 1/8 pixel
         // The trap is armed: collinear triangles that snap to a non-zero area and cover a centre.
         EXPECT_GT(run(collinearOnly, view, ref).stats.fragments, 10u) << "seed " << seed;
-        const Outcome expected = run(s, view, ref);
-        for (int threads : {1, 2}) {
-            CpuBackendOptions o = ref;
-            o.scalarReference = false;
-            o.threads = threads;
-            auto direct = backendFor(s.geo, view, o);
-            Outcome got;
-            got.results = direct->execute(s.list);
-            got.stats = direct->lastStats();
-            got.depth = direct->readDepth();
-            EXPECT_TRUE(direct->lastRanDirect());
-            expectSame(
-                expected, got,
-                "seed " + std::to_string(seed) + " threads " + std::to_string(threads) + " " + view.depth.name());
-        }
+        expectDirectOnThreads(s, view, ref, run(s, view, ref),
+                              "seed " + std::to_string(seed) + " " + view.depth.name());
     }
 }
 
@@ -1425,19 +1430,7 @@ TEST(Differential, DirectPathLongTrianglesWithSmallBoxes) {
         const Outcome longs = run(longOnly, view, ref);
         EXPECT_GT(longs.stats.fragments, 50u) << "seed " << seed;
         EXPECT_EQ(longs.stats.clipped, 0u) << "seed " << seed;
-        const Outcome expected = run(s, view, ref);
-        for (int threads : {1, 2}) {
-            CpuBackendOptions o = ref;
-            o.scalarReference = false;
-            o.threads = threads;
-            auto direct = backendFor(s.geo, view, o);
-            Outcome got;
-            got.results = direct->execute(s.list);
-            got.stats = direct->lastStats();
-            got.depth = direct->readDepth();
-            EXPECT_TRUE(direct->lastRanDirect());
-            expectSame(expected, got, "seed " + std::to_string(seed) + " threads " + std::to_string(threads));
-        }
+        expectDirectOnThreads(s, view, ref, run(s, view, ref), "seed " + std::to_string(seed));
     }
 }
 

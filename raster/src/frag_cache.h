@@ -22,8 +22,9 @@ struct FragGroup {
     uint32_t lanes;  // bit l set: pixel + l is a fragment (kGroupLanes); kWholeGroup: see below
     uint32_t z[4];  // incoming depth codes, per lane
 };
-// FragGroup::lanes: the four lane bits, and a flag set when all four pixels lie in the range the
-// group was recorded for (the recording thread's: the AVX2 replay reads and writes them whole).
+// FragGroup::lanes: the four lane bits, and a flag set when all four pixels lie in the tile the
+// group was recorded in (the pixels of the thread that replays it: the AVX2 replay then reads and
+// writes them whole, the uncovered ones unchanged).
 inline constexpr uint32_t kGroupLanes = 15, kWholeGroup = 16;
 static_assert(uint64_t(kMaxViewportSide) * uint64_t(kMaxViewportSide) <= uint64_t(UINT32_MAX),
               "FragGroup::pixel holds a depth-buffer index");

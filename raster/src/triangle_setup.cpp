@@ -306,7 +306,7 @@ __attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s,
 // + 2^S*(dx*dj - dy*di): exact in 32 bits for a lane whose snapped extent is under three pixels on
 // both axes (|dx|, |dy| < 3*2^S and |half - X|, |half - Y| < 4*2^S, S <= 12: below 2^30), which
 // every small lane is required to have (a box clipped to the viewport can be small when the
-// triangle is not). The pixel loops' 64-bit sums over 4 pixels x 3 edges were a third of the setup.
+// triangle is not); this replaced 64-bit products and sums for 4 pixels x 3 edges.
 // The depths share their terms: a row's z0 + dzdy*(...) for both pixels of the row, a column's
 // dzdx*(...) for both of the column.
 __attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i j0, __m128i j1, const __m128i x[3],
@@ -336,8 +336,8 @@ __attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i 
     const int tall = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(h, one)));
     const int valid[4] = {15, wide, tall, wide & tall};  // per pixel, the lanes whose box holds it
     // Per pixel (di, dj) = (p & 1, p >> 1), the OR of the three edges' c': its sign bit is set
-    // where some edge is negative.
-    // The corner pixel's centre in fixed point; half - X = cx - x_k, half - Y = cy - y_k.
+    // where some edge is negative. cx, cy: the corner pixel's centre in fixed point (half - X =
+    // cx - x_k, half - Y = cy - y_k).
     const __m128i cx = _mm_add_epi32(_mm_sll_epi32(i0, s), half), cy = _mm_add_epi32(_mm_sll_epi32(j0, s), half);
     __m128i any[4] = {_mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128()};
     for (int k = 0; k < 3; ++k) {
