@@ -188,8 +188,10 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     const __m256i off0 = _mm256_set_epi64x(3 * a0, 2 * a0, a0, 0), step0 = _mm256_set1_epi64x(4 * a0);
     const __m256i off1 = _mm256_set_epi64x(3 * a1, 2 * a1, a1, 0), step1 = _mm256_set1_epi64x(4 * a1);
     const __m256i off2 = _mm256_set_epi64x(3 * a2, 2 * a2, a2, 0), step2 = _mm256_set1_epi64x(4 * a2);
-    // Pixel centre i + l + 0.5 as double(i) + (l + 0.5): both exact, so the same value.
-    const __m256d centres = _mm256_set_pd(3.5, 2.5, 1.5, 0.5);
+    // Pixel centres i + l + 0.5, from double(x0) + (l + 0.5) in steps of 4.0: every sum is exact
+    // (small multiples of 1/2), so the same values as DepthPlane::at's.
+    const __m256d firstCentres = _mm256_add_pd(_mm256_set1_pd(double(x0)), _mm256_set_pd(3.5, 2.5, 1.5, 0.5));
+    const __m256d four = _mm256_set1_pd(4.0);
     const __m256d planeX0 = _mm256_set1_pd(t.plane.x0), dzdx = _mm256_set1_pd(t.plane.dzdx);
     uint64_t frag = 0, pass = 0;
     for (int j = y0; j <= y1; ++j) {
@@ -198,14 +200,14 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
         __m256i e2 = _mm256_add_epi64(_mm256_set1_epi64x(a2 * x0 + b2 * j + t.c[2]), off2);
         const __m256d row = _mm256_set1_pd(t.plane.row(j));
         uint32_t* d = depth + size_t(j) * stride;
+        __m256d centres = firstCentres;
         for (int i = x0; i <= x1; i += 4, e0 = _mm256_add_epi64(e0, step0), e1 = _mm256_add_epi64(e1, step1),
-                 e2 = _mm256_add_epi64(e2, step2)) {
+                 e2 = _mm256_add_epi64(e2, step2), centres = _mm256_add_pd(centres, four)) {
             const int outside = _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_or_si256(e0, _mm256_or_si256(e1, e2))));
             const int valid = x1 - i >= 3 ? 15 : (1 << (x1 - i + 1)) - 1;
             const int inside = ~outside & valid;
             if (inside == 0) continue;
-            const __m256d z = _mm256_add_pd(
-                row, _mm256_mul_pd(dzdx, _mm256_sub_pd(_mm256_add_pd(_mm256_set1_pd(double(i)), centres), planeX0)));
+            const __m256d z = _mm256_add_pd(row, _mm256_mul_pd(dzdx, _mm256_sub_pd(centres, planeX0)));
             const __m128i incoming = clampEncode4<Float>(z, bits);
             // Four pixels in the tile (this thread's: bx1 is its last column) read and written
             // whole, the verdict blended in (masked stores are microcoded on Zen 1); a group at
