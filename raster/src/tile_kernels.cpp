@@ -268,28 +268,22 @@ __attribute__((target("avx2"))) void runRecordsAvx2(const EdgeTri* recs, const S
         uint32_t* const d0 = depth + f.pixel;
         uint32_t* const d1 = d0 + (lanes > 3 ? stride : 0);  // the second row's, only when there is one
         const __m128i incoming = _mm_loadu_si128(reinterpret_cast<const __m128i*>(f.z));
-        const __m128i covered = laneMask(lanes);
-        if (d1 <= lastPair) [[likely]] {
-            const __m128i stored = _mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(d0)),
-                                                      _mm_loadl_epi64(reinterpret_cast<const __m128i*>(d1)));
-            const __m128i ok = depthTest4<F>(incoming, stored, covered);
-            frag += uint64_t(std::popcount(lanes));
-            pass += uint64_t(std::popcount(unsigned(_mm_movemask_ps(_mm_castsi128_ps(ok)))));
-            if (mask) {
-                // d1 first: when it is d0 (one row), its lanes failed (not covered) and d0's write wins.
-                const __m128i written = _mm_blendv_epi8(stored, incoming, ok);
-                _mm_storel_epi64(reinterpret_cast<__m128i*>(d1), _mm_srli_si128(written, 8));
-                _mm_storel_epi64(reinterpret_cast<__m128i*>(d0), written);
-            }
-            continue;
-        }
-        const __m128i stored =
-            _mm_unpacklo_epi64(_mm_maskload_epi32(reinterpret_cast<const int*>(d0), laneMask(lanes & 3)),
-                               _mm_maskload_epi32(reinterpret_cast<const int*>(d1), laneMask(lanes >> 2)));
-        const __m128i ok = depthTest4<F>(incoming, stored, covered);
+        const bool plain = d1 <= lastPair;  // both rows' pixel pairs lie in the buffer
+        const __m128i stored = plain
+            ? _mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(d0)),
+                                 _mm_loadl_epi64(reinterpret_cast<const __m128i*>(d1)))
+            : _mm_unpacklo_epi64(_mm_maskload_epi32(reinterpret_cast<const int*>(d0), laneMask(lanes & 3)),
+                                 _mm_maskload_epi32(reinterpret_cast<const int*>(d1), laneMask(lanes >> 2)));
+        const __m128i ok = depthTest4<F>(incoming, stored, laneMask(lanes));
         frag += uint64_t(std::popcount(lanes));
         pass += uint64_t(std::popcount(unsigned(_mm_movemask_ps(_mm_castsi128_ps(ok)))));
-        if (mask) {
+        if (!mask) continue;
+        if (plain) [[likely]] {
+            // d1 first: when it is d0 (one row), its lanes failed (not covered) and d0's write wins.
+            const __m128i written = _mm_blendv_epi8(stored, incoming, ok);
+            _mm_storel_epi64(reinterpret_cast<__m128i*>(d1), _mm_srli_si128(written, 8));
+            _mm_storel_epi64(reinterpret_cast<__m128i*>(d0), written);
+        } else {
             _mm_maskstore_epi32(reinterpret_cast<int*>(d0), _mm_and_si128(ok, laneMask(3)), incoming);
             _mm_maskstore_epi32(reinterpret_cast<int*>(d1), _mm_srli_si128(ok, 8), _mm_srli_si128(incoming, 8));
         }
