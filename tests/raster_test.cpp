@@ -207,6 +207,15 @@ TEST(RasterRules, InclusiveEdges) {
     }
 }
 
+// Trap: the trace reader and the Python module each parsing the rule's name their own way (they
+// did): the one parser takes back exactly the names toString gives, and nothing near them.
+TEST(RasterRules, FillRuleNamesRoundTrip) {
+    for (FillRule r : {FillRule::BottomLeft, FillRule::TopLeft}) EXPECT_EQ(parseFillRule(toString(r)), r);
+    EXPECT_NE(toString(FillRule::BottomLeft), std::string(toString(FillRule::TopLeft)));
+    for (const char* bad : {"", "top-right", "Top-Left", "bottom-left ", "bottomleft", "top"})
+        EXPECT_FALSE(parseFillRule(bad).has_value()) << bad;
+}
+
 // readDepthInto gives readDepth's image, shape and format included, into a buffer it reuses
 // (traps: a stale size or format after the view changes; a fresh allocation per read, which made
 // the study's cause attribution page-fault through every image).

@@ -312,6 +312,7 @@ TEST(Trace, HandEditedTracesAreRefusedWithTheProblemNamed) {
     EXPECT_TRUE(has(edited([](Parts& p) { p.header["frames"][0]["lists"][0]["view"]["depth"] = "D40"; }), "depth"));
     EXPECT_TRUE(has(edited([](Parts& p) { p.header["frames"][0]["lists"][0]["view"]["up"][1] = 2.0; }), "view"));
     EXPECT_TRUE(has(edited([](Parts& p) { p.header["rules"]["fill_rule"] = "top-right"; }), "fill_rule"));
+    EXPECT_TRUE(has(edited([](Parts& p) { p.header["rules"]["fill_rule"] = 1; }), "fill_rule is 1"));
     // A number beyond double's range: the JSON parser's out_of_range, not its parse_error (a fuzz
     // finding: it escaped the reader as an internal error).
     uint64_t headerBytes = 0;

@@ -632,9 +632,9 @@ PYBIND11_MODULE(_cullide, m) {
                  if (viewCacheBytes < 0)
                      fail("argument view_cache_bytes: " + std::to_string(viewCacheBytes) + " is negative");
                  o.viewCacheBytes = size_t(viewCacheBytes);
-                 if (fillRule == "bottom-left") o.fillRule = raster::FillRule::BottomLeft;
-                 else if (fillRule == "top-left") o.fillRule = raster::FillRule::TopLeft;
-                 else fail("argument fill_rule: '" + fillRule + "' is not 'bottom-left' or 'top-left'");
+                 const std::optional<raster::FillRule> rule = raster::parseFillRule(fillRule);
+                 if (!rule) fail("argument fill_rule: '" + fillRule + "' is not " + raster::kFillRuleNames);
+                 o.fillRule = *rule;
                  PyCpuBackend b;
                  b.backend = raster::makeCpuBackend(o);
                  return b;

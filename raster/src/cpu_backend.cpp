@@ -58,6 +58,12 @@ const char* toString(FillRule rule) {
     return rule == FillRule::BottomLeft ? "bottom-left" : "top-left";
 }
 
+std::optional<FillRule> parseFillRule(std::string_view name) {
+    for (FillRule rule : {FillRule::BottomLeft, FillRule::TopLeft})
+        if (name == toString(rule)) return rule;
+    return std::nullopt;
+}
+
 namespace {
 
 using detail::ConsRec;

@@ -401,9 +401,9 @@ TraceReader::TraceReader(std::filesystem::path path) : path_(std::move(path)), p
         rules_.subpixelBits = int(unsignedField(rules, "subpixel_bits", "rules", kMaxSubpixelBits));
         if (rules_.subpixelBits < kMinSubpixelBits) throw std::invalid_argument("rules.subpixel_bits is 0");
         const Json& fill = field(rules, "fill_rule", "rules");
-        if (fill == "bottom-left") rules_.fillRule = FillRule::BottomLeft;
-        else if (fill == "top-left") rules_.fillRule = FillRule::TopLeft;
-        else throw std::invalid_argument("rules.fill_rule is " + fill.dump() + ", not \"bottom-left\" or \"top-left\"");
+        const std::optional<FillRule> rule = fill.is_string() ? parseFillRule(fill.get<std::string>()) : std::nullopt;
+        if (!rule) throw std::invalid_argument("rules.fill_rule is " + fill.dump() + ", not " + kFillRuleNames);
+        rules_.fillRule = *rule;
         rules_.otherSubpixelBits = int(unsignedField(rules, "other_subpixel_bits", "rules", 24));
         if (rules_.otherSubpixelBits < 1) throw std::invalid_argument("rules.other_subpixel_bits is 0");
         rules_.depthLsb = numberField(field(rules, "depth_margin_lsb", "rules"), "rules.depth_margin_lsb");

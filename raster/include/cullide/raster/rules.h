@@ -100,6 +100,8 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <optional>
+#include <string_view>
 
 namespace cullide::raster {
 
@@ -110,6 +112,10 @@ enum class FillRule : uint8_t {
 };
 
 const char* toString(FillRule rule);
+// The rule toString names `name` ("bottom-left", "top-left"); nullopt for any other text. The one
+// parser of the name, for the trace reader and the Python module (each words its own error).
+std::optional<FillRule> parseFillRule(std::string_view name);
+inline constexpr const char* kFillRuleNames = "'bottom-left' or 'top-left'";
 
 // Subpixel bits S. 8 is llvmpipe's; GL requires at least 4. At least 1 so that pixel centres
 // (half-integers) are exact fixed-point numbers; at most 12 so that the guard band still covers
