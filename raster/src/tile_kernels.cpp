@@ -188,51 +188,72 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     const __m256i off0 = _mm256_set_epi64x(3 * a0, 2 * a0, a0, 0), step0 = _mm256_set1_epi64x(4 * a0);
     const __m256i off1 = _mm256_set_epi64x(3 * a1, 2 * a1, a1, 0), step1 = _mm256_set1_epi64x(4 * a1);
     const __m256i off2 = _mm256_set_epi64x(3 * a2, 2 * a2, a2, 0), step2 = _mm256_set1_epi64x(4 * a2);
-    // Pixel centres i + l + 0.5, from double(x0) + (l + 0.5) in steps of 4.0: every sum is exact
-    // (small multiples of 1/2), so the same values as DepthPlane::at's.
-    const __m256d firstCentres = _mm256_add_pd(_mm256_set1_pd(double(x0)), _mm256_set_pd(3.5, 2.5, 1.5, 0.5));
-    const __m256d four = _mm256_set1_pd(4.0);
+    const __m256d offsets = _mm256_set_pd(3.5, 2.5, 1.5, 0.5);
     const __m256d planeX0 = _mm256_set1_pd(t.plane.x0), dzdx = _mm256_set1_pd(t.plane.dzdx);
     uint64_t frag = 0, pass = 0;
-    for (int j = y0; j <= y1; ++j) {
-        __m256i e0 = _mm256_add_epi64(_mm256_set1_epi64x(a0 * x0 + b0 * j + t.c[0]), off0);
-        __m256i e1 = _mm256_add_epi64(_mm256_set1_epi64x(a1 * x0 + b1 * j + t.c[1]), off1);
-        __m256i e2 = _mm256_add_epi64(_mm256_set1_epi64x(a2 * x0 + b2 * j + t.c[2]), off2);
-        const __m256d row = _mm256_set1_pd(t.plane.row(j));
-        uint32_t* d = depth + size_t(j) * stride;
-        __m256d centres = firstCentres;
-        for (int i = x0; i <= x1; i += 4, e0 = _mm256_add_epi64(e0, step0), e1 = _mm256_add_epi64(e1, step1),
-                 e2 = _mm256_add_epi64(e2, step2), centres = _mm256_add_pd(centres, four)) {
-            const int outside = _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_or_si256(e0, _mm256_or_si256(e1, e2))));
-            const int valid = x1 - i >= 3 ? 15 : (1 << (x1 - i + 1)) - 1;
-            const int inside = ~outside & valid;
-            if (inside == 0) continue;
-            const __m256d z = _mm256_add_pd(row, _mm256_mul_pd(dzdx, _mm256_sub_pd(centres, planeX0)));
+    // Two passes over batches of rows. The first tests every group's edges and keeps the groups
+    // with fragments, as (row, column, lanes) in 32 bits (pixel indices are below 2^14), without a
+    // branch on whether a group has any: on small triangles that branch went either way (half of
+    // the groups of their boxes are empty) and each miss flushed the depth work after it. The
+    // second runs the kept groups in the same order: the same fragments, tests, writes and records
+    // as one pass.
+    constexpr int kBatch = 512;  // groups kept before the second pass; a row has at most 257
+    uint32_t kept[kBatch];
+    const int rowGroups = (x1 - x0) / 4 + 1;
+    const auto runKept = [&](int n) __attribute__((target("avx2"), always_inline)) {
+        for (int k = 0; k < n; ++k) {
+            const uint32_t g = kept[k];
+            const int j = int(g >> 18), i = int(g >> 4 & 0x3FFF), inside = int(g & 15);
+            // Pixel centres i + l + 0.5 from double(i) + (l + 0.5): exact (small multiples of 1/2),
+            // so the same values as DepthPlane::at's.
+            const __m256d centres = _mm256_add_pd(_mm256_set1_pd(double(i)), offsets);
+            const __m256d z =
+                _mm256_add_pd(_mm256_set1_pd(t.plane.row(j)), _mm256_mul_pd(dzdx, _mm256_sub_pd(centres, planeX0)));
             const __m128i incoming = clampEncode4<Float>(z, bits);
             // Four pixels in the tile (this thread's: bx1 is its last column) read and written
             // whole, the verdict blended in (masked stores are microcoded on Zen 1); a group at
             // the tile's right edge masked.
             const bool whole = i + 3 <= bx1;
             if constexpr (Record) {
-                FragGroup* g = rec++;
-                g->pixel = uint32_t(size_t(j) * stride + size_t(i));
-                g->lanes = uint32_t(inside) | (whole ? kWholeGroup : 0);
-                _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), incoming);
+                FragGroup* r = rec++;
+                r->pixel = uint32_t(size_t(j) * stride + size_t(i));
+                r->lanes = uint32_t(inside) | (whole ? kWholeGroup : 0);
+                _mm_storeu_si128(reinterpret_cast<__m128i*>(r->z), incoming);
             }
             const __m128i lanes = _mm_load_si128(reinterpret_cast<const __m128i*>(kLaneMasks[inside]));
-            int* const p = reinterpret_cast<int*>(d + i);
+            int* const p = reinterpret_cast<int*>(depth + size_t(j) * stride + size_t(i));
             const __m128i stored =
                 whole ? _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)) : _mm_maskload_epi32(p, lanes);
             const __m128i ok = depthTest4<F>(incoming, stored, lanes);
             const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
             frag += uint64_t(std::popcount(unsigned(inside)));
             pass += uint64_t(std::popcount(unsigned(okBits)));
-            if (mask && okBits != 0) {
+            // A whole group is written back whatever the verdict (no branch on it either).
+            if (mask) {
                 if (whole) _mm_storeu_si128(reinterpret_cast<__m128i*>(p), _mm_blendv_epi8(stored, incoming, ok));
-                else _mm_maskstore_epi32(p, ok, incoming);
+                else if (okBits != 0) _mm_maskstore_epi32(p, ok, incoming);
             }
         }
+    };
+    int n = 0;
+    for (int j = y0; j <= y1; ++j) {
+        if (n + rowGroups > kBatch) {
+            runKept(n);
+            n = 0;
+        }
+        __m256i e0 = _mm256_add_epi64(_mm256_set1_epi64x(a0 * x0 + b0 * j + t.c[0]), off0);
+        __m256i e1 = _mm256_add_epi64(_mm256_set1_epi64x(a1 * x0 + b1 * j + t.c[1]), off1);
+        __m256i e2 = _mm256_add_epi64(_mm256_set1_epi64x(a2 * x0 + b2 * j + t.c[2]), off2);
+        for (int i = x0; i <= x1; i += 4, e0 = _mm256_add_epi64(e0, step0), e1 = _mm256_add_epi64(e1, step1),
+                 e2 = _mm256_add_epi64(e2, step2)) {
+            const int outside = _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_or_si256(e0, _mm256_or_si256(e1, e2))));
+            const int valid = x1 - i >= 3 ? 15 : (1 << (x1 - i + 1)) - 1;
+            const int inside = ~outside & valid;
+            kept[n] = uint32_t(j) << 18 | uint32_t(i) << 4 | uint32_t(inside);
+            n += inside != 0;
+        }
     }
+    runKept(n);
     fragments += frag;
     passed += pass;
 }
