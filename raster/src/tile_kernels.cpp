@@ -359,9 +359,10 @@ __attribute__((target("avx2"))) void replayFragmentsAvx2(const FragGroup* g, con
         const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
         frag += uint64_t(std::popcount(bits));
         pass += uint64_t(std::popcount(unsigned(okBits)));
-        if (mask && okBits != 0) {
+        // A whole group is written back whatever the verdict (rasterizeInTileAvx2).
+        if (mask) {
             if (whole) _mm_storeu_si128(reinterpret_cast<__m128i*>(d), _mm_blendv_epi8(stored, incoming, ok));
-            else _mm_maskstore_epi32(d, ok, incoming);
+            else if (okBits != 0) _mm_maskstore_epi32(d, ok, incoming);
         }
     }
     fragments += frag;
