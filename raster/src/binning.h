@@ -116,7 +116,8 @@ inline void binToTiles(std::span<const TileRect> rects, const TileGrid& grid, st
 
 // First index in [0, n) of `v` (sorted) with v[idx] >= key, searching outwards from `hint`
 // (galloping).
-inline size_t gallopLowerBound(const uint32_t* v, size_t n, size_t hint, uint32_t key) {
+template <typename T>
+size_t gallopLowerBound(const T* v, size_t n, size_t hint, T key) {
     if (hint > n) hint = n;
     if (hint < n && v[hint] < key) {  // forward
         size_t step = 1, lo = hint + 1;

@@ -217,6 +217,11 @@ void runFromView(const CommandList& list, const ViewFragments& frags, const Tile
             const TileBounds b = boundsOf(grid, tile, width, height);
             const std::vector<uint64_t>& tf = frags.tiles[tile].frag;
             const int triShift = frags.layout.triShift();
+            // The last draw's triangles and run: Cullide's lists draw each range twice in a row
+            // (written and tested), and in triangle order within a pass (forward, then reverse),
+            // so a run is the last one again or found by galloping from it.
+            uint32_t lastFirst = 1, lastEnd = 0;  // no draw yet (first > end)
+            size_t f = 0, l = 0;
             for (const ViewEvent& e : events) {
                 if (e.clear) {
                     for (int j = b.y0; j <= b.y1; ++j)
@@ -226,10 +231,14 @@ void runFromView(const CommandList& list, const ViewFragments& frags, const Tile
                 if (tf.empty()) continue;
                 // The draw's fragments in this tile: those of its triangles, a run (the triangle on
                 // top: each fragment of a lower triangle is below first << triShift, the others not).
-                const auto f = std::lower_bound(tf.begin(), tf.end(), uint64_t(e.first) << triShift);
-                const auto l = std::lower_bound(f, tf.end(), uint64_t(e.end) << triShift);
+                if (e.first != lastFirst || e.end != lastEnd) {
+                    const size_t hint = e.first >= lastEnd ? l : f;
+                    f = gallopLowerBound(tf.data(), tf.size(), hint, uint64_t(e.first) << triShift);
+                    l = gallopLowerBound(tf.data(), tf.size(), f, uint64_t(e.end) << triShift);
+                    lastFirst = e.first, lastEnd = e.end;
+                }
                 const uint64_t before = out.passed;
-                const uint64_t* const run = tf.data() + (f - tf.begin());
+                const uint64_t* const run = tf.data() + f;
                 kReplayView[size_t(e.func)](run, run + (l - f), frags.layout, depth, size_t(width), b.x0, b.y0, e.mask,
                                             out.fragments, out.passed);
                 countQuery(out, e.query, out.passed - before);
