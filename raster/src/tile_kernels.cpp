@@ -199,6 +199,8 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     // as one pass.
     constexpr int kBatch = 512;  // groups kept before the second pass; a row has at most 257
     uint32_t kept[kBatch];
+    double rowZ[kBatch];  // DepthPlane::row of the batch's rows, from its first
+    int batchY = y0;
     const int rowGroups = (x1 - x0) / 4 + 1;
     const auto runKept = [&](int n) __attribute__((target("avx2"), always_inline)) {
         for (int k = 0; k < n; ++k) {
@@ -208,7 +210,7 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
             // so the same values as DepthPlane::at's.
             const __m256d centres = _mm256_add_pd(_mm256_set1_pd(double(i)), offsets);
             const __m256d z =
-                _mm256_add_pd(_mm256_set1_pd(t.plane.row(j)), _mm256_mul_pd(dzdx, _mm256_sub_pd(centres, planeX0)));
+                _mm256_add_pd(_mm256_set1_pd(rowZ[j - batchY]), _mm256_mul_pd(dzdx, _mm256_sub_pd(centres, planeX0)));
             const __m128i incoming = clampEncode4<Float>(z, bits);
             // Four pixels in the tile (this thread's: bx1 is its last column) read and written
             // whole, the verdict blended in (masked stores are microcoded on Zen 1); a group at
@@ -237,10 +239,12 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     };
     int n = 0;
     for (int j = y0; j <= y1; ++j) {
-        if (n + rowGroups > kBatch) {
+        if (n + rowGroups > kBatch || j - batchY == kBatch) {
             runKept(n);
             n = 0;
+            batchY = j;
         }
+        rowZ[j - batchY] = t.plane.row(j);
         __m256i e0 = _mm256_add_epi64(_mm256_set1_epi64x(a0 * x0 + b0 * j + t.c[0]), off0);
         __m256i e1 = _mm256_add_epi64(_mm256_set1_epi64x(a1 * x0 + b1 * j + t.c[1]), off1);
         __m256i e2 = _mm256_add_epi64(_mm256_set1_epi64x(a2 * x0 + b2 * j + t.c[2]), off2);
