@@ -1192,11 +1192,16 @@ TEST(Differential, ViewCacheReplaysLaterLists) {
 
 // Trap: a captured fragment packs its triangle, depth code and place in 64 bits, the triangle on
 // top, and a draw's run is found by comparing against (first << shift) and (end << shift): a
-// draw ending at the last triangle must not overflow that (4096 triangles, float depth and
-// 1024 px tiles take 13 + 32 + 20 bits, one too many: no capture; 512 px tiles fit exactly
-// 63 bits and replay).
+// draw ending at the last triangle must not overflow that. The place is the depth-buffer index
+// from the tile's first pixel, so its width follows the tile's rows and the viewport's width: on a
+// 1024 x 520 viewport, 4096 triangles (13 bits) and float depth (32) leave 19 bits, which 512 px
+// tiles fit exactly (511 * 1024 + 511 < 2^19: replay) and 1024 px tiles, clipped to 1024 x 520,
+// do not (519 * 1024 + 1023 >= 2^19: no capture). Small triangles, and the fast path without a
+// view cache as the reference (the scalar path takes most of a minute on this viewport; the
+// other Differential tests tie the two together).
 TEST(Differential, ViewCacheAtTheLayoutsLimit) {
-    const RandomScene s = randomScene(77, 100, 90, 4096, 0);
+    const int W = 1024, H = 520;
+    const RandomScene s = randomScene(77, W, H, 4096, 0, 12.0);
     CommandList whole, tail;
     whole.clear(1.0);
     for (int k = 0; k < 2; ++k) {
@@ -1214,12 +1219,11 @@ TEST(Differential, ViewCacheAtTheLayoutsLimit) {
         tail.draw(first, 4096 - first);
         tail.endQuery();
     }
-    const OrthoView view = windowView(100, 90, DepthFormat::float32());
-    CpuBackendOptions ref;
-    ref.scalarReference = true;
+    const OrthoView view = windowView(W, H, DepthFormat::float32());
     for (int tile : {512, 1024}) {
-        CpuBackendOptions fast;
-        fast.tileSize = tile;
+        CpuBackendOptions ref, fast;
+        ref.tileSize = fast.tileSize = tile;
+        ref.viewCacheBytes = 0;
         auto a = backendFor(s.geo, view, ref), b = backendFor(s.geo, view, fast);
         for (const CommandList* list : {&whole, &tail, &whole}) {
             EXPECT_EQ(a->execute(*list), b->execute(*list)) << "tile " << tile;

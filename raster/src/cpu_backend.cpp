@@ -442,8 +442,9 @@ private:
         detail::StateWalker walk(state_, list.queryCount());
         setupRecords(list);
         makeEvents(list, walk);
-        const detail::FragLayout layout = detail::FragLayout::of(triangles_.size(), options_.tileSize, view_.depth);
-        const bool capture = !viewsFull_ && options_.viewCacheBytes > 0 && layout.axisBits > 0 &&
+        const detail::FragLayout layout =
+            detail::FragLayout::of(triangles_.size(), options_.tileSize, view_.width, view_.height, view_.depth);
+        const bool capture = !viewsFull_ && options_.viewCacheBytes > 0 && layout.placeBits > 0 &&
             detail::replayable(list) && detail::drawsEverything(plain_, triangles_.size());
         detail::ViewFragments v;
         if (capture) {

@@ -21,12 +21,15 @@ bool replayable(const CommandList& list) {
     return list.conservativeCount() == 0;
 }
 
-FragLayout FragLayout::of(size_t triangles, int tileSize, const DepthFormat& format) {
+FragLayout FragLayout::of(size_t triangles, int tileSize, int width, int height, const DepthFormat& format) {
     FragLayout l;
-    l.axisBits = std::bit_width(unsigned(std::max(tileSize, 2) - 1));
+    // A tile's last pixel (its columns and rows within the viewport).
+    const uint64_t last =
+        uint64_t(std::min(tileSize, height) - 1) * uint64_t(width) + uint64_t(std::min(tileSize, width) - 1);
+    l.placeBits = std::max(1, int(std::bit_width(last)));
     l.zBits = format.kind == DepthFormat::Kind::Float32 ? 32 : format.bits;
     l.triBits = std::bit_width(uint64_t(triangles));  // up to `triangles` itself (a draw's end)
-    if (2 * l.axisBits + l.zBits + l.triBits > 64) l.axisBits = 0;
+    if (l.placeBits + l.zBits + l.triBits > 64) l.placeBits = 0;
     return l;
 }
 
@@ -51,17 +54,16 @@ TileBounds boundsOf(const TileGrid& grid, size_t tile, int width, int height) {
     return {x0, y0, std::min(x0 + ts, width) - 1, std::min(y0 + ts, height) - 1};
 }
 
-// The fragments of groups [g, e) of a record of triangle t (tile from (x0, y0)), written from
-// `dst` on with room for four a group; returns their end. A group's lanes lie in one row (every
-// kernel opens a group per row): one division a group (per fragment, they were most of this
-// loop), and each lane written whether it is a fragment or not, the end advanced by its bit.
-uint64_t* appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t width, uint32_t x0, uint32_t y0,
-                       const FragLayout& layout, uint64_t* dst) {
+// The fragments of groups [g, e) of a record of triangle t (the tile's first pixel at depth-buffer
+// index `origin`), written from `dst` on with room for four a group; returns their end. A group's
+// lanes lie in one row (every kernel opens a group per row), and each lane is written whether it
+// is a fragment or not, the end advanced by its bit.
+uint64_t* appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t origin, const FragLayout& layout,
+                       uint64_t* dst) {
     const int zShift = layout.zShift();
-    const uint64_t tri = layout.pack(t, 0, 0, 0);
+    const uint64_t tri = layout.pack(t, 0, 0);
     for (; g != e; ++g) {
-        const uint32_t y = g->pixel / width, x = g->pixel - y * width;
-        const uint64_t at = tri | layout.pack(0, 0, x - x0, y - y0);  // + l: the lane's x, within the tile
+        const uint64_t at = tri | (g->pixel - origin);  // + l: the lane's place, within the tile
         for (uint32_t l = 0; l < 4; ++l) {
             *dst = (at + l) | uint64_t(g->z[l]) << zShift;
             dst += g->lanes >> l & 1;
@@ -81,6 +83,7 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
                  uint32_t* depth, int bits, const FragLayout& layout, std::vector<FragGroup>& scratch,
                  TileFragments& out) {
     const TileBounds b = boundsOf(grid, tile, width, height);
+    const uint32_t origin = uint32_t(b.y0) * uint32_t(width) + uint32_t(b.x0);
     const uint32_t* recs = plain.bins.begin(tile);
     const size_t n = plain.bins.size(tile);
     out = {};
@@ -101,7 +104,7 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
         uint64_t* dst = out.frag.data();
         for (size_t p = 0; p < n; ++p)
             dst = appendGroups(groups + capture.groupBegin[p], groups + capture.groupEnd[p], triangleOf(recs[p]),
-                               uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), layout, dst);
+                               origin, layout, dst);
         out.frag.resize(count);
         return;
     }
@@ -116,8 +119,8 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
                                                 false, bits, fragments, passed, w);
         const size_t at = out.frag.size();
         out.frag.resize(at + 4 * size_t(w - scratch.data()));
-        const uint64_t* end = appendGroups(scratch.data(), w, triangleOf(recs[p]), uint32_t(width), uint32_t(b.x0),
-                                           uint32_t(b.y0), layout, out.frag.data() + at);
+        const uint64_t* end =
+            appendGroups(scratch.data(), w, triangleOf(recs[p]), origin, layout, out.frag.data() + at);
         out.frag.resize(size_t(end - out.frag.data()));
     }
     out.frag.shrink_to_fit();
@@ -151,11 +154,11 @@ void replayView(const uint64_t* f, const uint64_t* e, const FragLayout& layout, 
                 int y0, bool mask, uint64_t& fragments, uint64_t& passed) {
     uint64_t pass = 0;
     uint32_t* const origin = depth + size_t(y0) * stride + size_t(x0);
-    const int axis = layout.axisBits, zShift = layout.zShift();
-    const uint64_t axisMask = (uint64_t(1) << axis) - 1, zMask = (uint64_t(1) << layout.zBits) - 1;
+    const int zShift = layout.zShift();
+    const uint64_t placeMask = (uint64_t(1) << layout.placeBits) - 1, zMask = (uint64_t(1) << layout.zBits) - 1;
     for (const uint64_t* i = f; i != e; ++i) {
         const uint64_t v = *i;
-        uint32_t& d = origin[size_t(v >> axis & axisMask) * stride + size_t(v & axisMask)];
+        uint32_t& d = origin[v & placeMask];
         const uint32_t incoming = uint32_t(v >> zShift & zMask), stored = d;
         const bool ok = depthTest(F, incoming, stored);
         pass += ok;

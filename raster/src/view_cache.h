@@ -31,17 +31,19 @@
 namespace cullide::raster::detail {
 
 // A fragment in 64 bits: its triangle above its incoming depth code above its place in the tile
-// (x and y in axisBits each), for a geometry, tile size and depth format whose widths fit
-// (FragLayout::of). With the triangle on top, a tile's fragments (in triangle order) are below
-// t << triShift exactly for the triangles below t, so binary searches find a draw's run.
+// (the depth-buffer index from the tile's first pixel: y * width + x, in placeBits), for a
+// geometry, tile size, viewport and depth format whose widths fit (FragLayout::of). With the
+// triangle on top, a tile's fragments (in triangle order) are below t << triShift exactly for the
+// triangles below t, so binary searches find a draw's run. The place as an index, not as x and
+// y, spares the replay a multiplication per fragment (and the capture a division per group).
 struct FragLayout {
-    int axisBits = 0, zBits = 0, triBits = 0;
-    // The layout for these, or axisBits 0 when they need more than 64 bits (then no capture).
-    static FragLayout of(size_t triangles, int tileSize, const DepthFormat& format);
-    int zShift() const { return 2 * axisBits; }
-    int triShift() const { return 2 * axisBits + zBits; }
-    uint64_t pack(uint32_t tri, uint32_t z, uint32_t x, uint32_t y) const {
-        return uint64_t(tri) << triShift() | uint64_t(z) << zShift() | uint64_t(y) << axisBits | x;
+    int placeBits = 0, zBits = 0, triBits = 0;
+    // The layout for these, or placeBits 0 when they need more than 64 bits (then no capture).
+    static FragLayout of(size_t triangles, int tileSize, int width, int height, const DepthFormat& format);
+    int zShift() const { return placeBits; }
+    int triShift() const { return placeBits + zBits; }
+    uint64_t pack(uint32_t tri, uint32_t z, uint32_t place) const {
+        return uint64_t(tri) << triShift() | uint64_t(z) << zShift() | place;
     }
 };
 
