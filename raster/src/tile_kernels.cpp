@@ -162,7 +162,7 @@ __attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x
         const int okBits = _mm_movemask_ps(_mm_castsi128_ps(ok));
         frag += uint64_t(std::popcount(unsigned(inside)));
         pass += uint64_t(std::popcount(unsigned(okBits)));
-        if (mask && okBits != 0) {
+        if (mask) {  // written back whatever the verdict (no branch on it: rasterizeInTileAvx2)
             // d1 first: when it is d0 (one row), its lanes failed (not valid) and d0's write wins.
             const __m128i written = _mm_blendv_epi8(stored, incoming, ok);
             storeRow(d1, _mm_srli_si128(written, 8));
