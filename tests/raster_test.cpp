@@ -1447,6 +1447,64 @@ TEST(Differential, DirectPathLongTrianglesWithSmallBoxes) {
     }
 }
 
+// Trap: the tile kernel keeps a record's groups with fragments in batches (tile_kernels.cpp,
+// rasterizeInTileAvx2: up to 512 groups, and the depth plane of up to 512 rows), running a batch
+// when the next row might not fit. A batch run too late overflows them; one row's groups split
+// between two batches, or a batch's rows taken from the wrong first row, would change fragments,
+// depths or counts. Large triangles (many full rows of groups: a batch every few rows), tall
+// slivers under a pixel wide across up to 1000 rows (most rows hold no fragment, so the rows,
+// not the groups, fill a batch; 1024 px tiles hold them whole), drawn twice (written, then
+// tested: the tiles, not the direct path), against the scalar path; 64 and 1024 px tiles, one and
+// two threads, both depth kinds. Both kinds of batch end happen here (counted once: 2156 by
+// groups, 192 by rows); a batch run too late writes past the kernel's stack arrays, which the
+// ASan stage reports.
+TEST(Differential, TileKernelBatchesOfTallAndWideRecords) {
+    const int W = 300, H = 1100;
+    std::mt19937_64 rng(31);
+    auto uni = [&](double lo, double hi) { return lo + (hi - lo) * double(rng() >> 11) * 0x1p-53; };
+    RandomScene s;
+    for (int t = 0; t < 24; ++t) {
+        const float z = float(uni(0.1, 0.9));
+        if (t % 3 == 0) {  // large: a few hundred pixels across
+            const double x = uni(0, W), y = uni(0, H);
+            s.geo.tri(Vec3f(float(x), float(y), z), Vec3f(float(x + uni(150, 400)), float(y + uni(-50, 50)), z + 0.05f),
+                      Vec3f(float(x + uni(-50, 50)), float(y + uni(150, 600)), z - 0.05f));
+        } else {  // a sliver 0.1-0.8 px wide, 600-1050 rows tall, leaning 3-40 px
+            const double x = uni(10, W - 50), y = uni(0, 40), h = uni(600, 1050), lean = uni(3, 40), w = uni(0.1, 0.8);
+            s.geo.tri(Vec3f(float(x), float(y), z), Vec3f(float(x + w), float(y), z),
+                      Vec3f(float(x + lean), float(y + h), z + 0.02f));
+        }
+    }
+    const uint32_t n = uint32_t(s.geo.triangles.size());
+    s.list.clear(1.0);
+    for (uint32_t first : {0u, n / 2}) {
+        const uint32_t count = first == 0 ? n / 2 : n - n / 2;
+        s.list.depthFunc(DepthFunc::Less);
+        s.list.draw(first, count);
+        s.list.depthMask(false);
+        s.list.depthFunc(DepthFunc::GEqual);
+        s.list.beginQuery(QueryKind::SamplesPassed);
+        s.list.draw(first, count);
+        s.list.endQuery();
+        s.list.depthMask(true);
+    }
+    for (const DepthFormat& format : {DepthFormat::unorm(24), DepthFormat::float32()}) {
+        const OrthoView view = windowView(W, H, format);
+        CpuBackendOptions ref;
+        ref.scalarReference = true;
+        const Outcome expected = run(s, view, ref);
+        EXPECT_GT(expected.stats.fragments, 50000u);  // armed: the large triangles drew
+        for (int tile : {64, 1024})
+            for (int threads : {1, 2}) {
+                CpuBackendOptions fast;
+                fast.tileSize = tile;
+                fast.threads = threads;
+                expectSame(expected, run(s, view, fast),
+                           format.name() + " tile " + std::to_string(tile) + " threads " + std::to_string(threads));
+            }
+    }
+}
+
 // Trap: setup writes each chunk of 1024 triangles into a slot of one record per triangle; a chunk
 // of triangles clipped into several sub-triangles outgrows its slot, spills, and every slot moves
 // (records.cpp). A wrong shift of the record ranges, a spilled chunk's records lost, or a spill
