@@ -1193,44 +1193,53 @@ TEST(Differential, ViewCacheReplaysLaterLists) {
 // Trap: a captured fragment packs its triangle, depth code and place in 64 bits, the triangle on
 // top, and a draw's run is found by comparing against (first << shift) and (end << shift): a
 // draw ending at the last triangle must not overflow that. The place is the depth-buffer index
-// from the tile's first pixel, so its width follows the tile's rows and the viewport's width: on a
-// 1024 x 520 viewport, 4096 triangles (13 bits) and float depth (32) leave 19 bits, which 512 px
-// tiles fit exactly (511 * 1024 + 511 < 2^19: replay) and 1024 px tiles, clipped to 1024 x 520,
-// do not (519 * 1024 + 1023 >= 2^19: no capture). Small triangles, and the fast path without a
-// view cache as the reference (the scalar path takes most of a minute on this viewport; the
-// other Differential tests tie the two together).
+// from the tile's first pixel, its width following the tile's rows and the viewport's width, or,
+// where that does not fit, x and y (FragLayout::axisBits). With float depth (32 bits):
+// - 1024 x 520, 4096 triangles (13 bits): 512 px tiles fit the index exactly (511 * 1024 + 511 <
+//   2^19: replay); 1024 px tiles, clipped to 1024 x 520, fit neither the index (519 * 1024 + 1023
+//   >= 2^19) nor x and y (10 bits each): no capture;
+// - 4096 x 64, 16384 triangles (15 bits), 64 px tiles: the index takes 18 bits, one too many, x and
+//   y 12: replay from x and y.
+// Small triangles, and the fast path without a view cache as the reference (the scalar path takes
+// most of a minute on these viewports; the other Differential tests tie the two together).
 TEST(Differential, ViewCacheAtTheLayoutsLimit) {
-    const int W = 1024, H = 520;
-    const RandomScene s = randomScene(77, W, H, 4096, 0, 12.0);
-    CommandList whole, tail;
-    whole.clear(1.0);
-    for (int k = 0; k < 2; ++k) {
-        whole.beginQuery();
-        whole.draw(0, 2048);
-        whole.endQuery();
-        whole.beginQuery();
-        whole.draw(2048, 2048);
-        whole.endQuery();
-    }
-    tail.clear(1.0);
-    tail.depthFunc(DepthFunc::LEqual);
-    for (uint32_t first : {4095u, 100u, 0u}) {
-        tail.beginQuery();
-        tail.draw(first, 4096 - first);
-        tail.endQuery();
-    }
-    const OrthoView view = windowView(W, H, DepthFormat::float32());
-    for (int tile : {512, 1024}) {
+    struct Case {
+        int W, H, triangles, tile;
+        bool replays;
+    };
+    for (const Case& c :
+         {Case{1024, 520, 4096, 512, true}, Case{1024, 520, 4096, 1024, false}, Case{4096, 64, 16384, 64, true}}) {
+        const RandomScene s = randomScene(77, c.W, c.H, c.triangles, 0, 12.0);
+        const uint32_t n = uint32_t(c.triangles), half = n / 2;
+        CommandList whole, tail;
+        whole.clear(1.0);
+        for (int k = 0; k < 2; ++k) {
+            whole.beginQuery();
+            whole.draw(0, half);
+            whole.endQuery();
+            whole.beginQuery();
+            whole.draw(half, n - half);
+            whole.endQuery();
+        }
+        tail.clear(1.0);
+        tail.depthFunc(DepthFunc::LEqual);
+        for (uint32_t first : {n - 1, 100u, 0u}) {
+            tail.beginQuery();
+            tail.draw(first, n - first);
+            tail.endQuery();
+        }
+        const OrthoView view = windowView(c.W, c.H, DepthFormat::float32());
+        const std::string what = std::to_string(c.W) + " x " + std::to_string(c.H) + " tile " + std::to_string(c.tile);
         CpuBackendOptions ref, fast;
-        ref.tileSize = fast.tileSize = tile;
+        ref.tileSize = fast.tileSize = c.tile;
         ref.viewCacheBytes = 0;
         auto a = backendFor(s.geo, view, ref), b = backendFor(s.geo, view, fast);
         for (const CommandList* list : {&whole, &tail, &whole}) {
-            EXPECT_EQ(a->execute(*list), b->execute(*list)) << "tile " << tile;
-            EXPECT_EQ(a->lastStats(), b->lastStats()) << "tile " << tile;
+            EXPECT_EQ(a->execute(*list), b->execute(*list)) << what;
+            EXPECT_EQ(a->lastStats(), b->lastStats()) << what;
         }
-        EXPECT_EQ(b->lastReplayedView(), tile == 512);
-        expectSame({{}, a->readDepth(), {}}, {{}, b->readDepth(), {}}, "tile " + std::to_string(tile));
+        EXPECT_EQ(b->lastReplayedView(), c.replays) << what;
+        expectSame({{}, a->readDepth(), {}}, {{}, b->readDepth(), {}}, what);
     }
 }
 

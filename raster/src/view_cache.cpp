@@ -29,7 +29,11 @@ FragLayout FragLayout::of(size_t triangles, int tileSize, int width, int height,
     l.placeBits = std::max(1, int(std::bit_width(last)));
     l.zBits = format.kind == DepthFormat::Kind::Float32 ? 32 : format.bits;
     l.triBits = std::bit_width(uint64_t(triangles));  // up to `triangles` itself (a draw's end)
-    if (l.placeBits + l.zBits + l.triBits > 64) l.placeBits = 0;
+    if (l.placeBits + l.zBits + l.triBits > 64) {
+        l.axisBits = std::bit_width(unsigned(std::max(tileSize, 2) - 1));
+        l.placeBits = 2 * l.axisBits;
+        if (l.placeBits + l.zBits + l.triBits > 64) l.placeBits = l.axisBits = 0;
+    }
     return l;
 }
 
@@ -54,20 +58,31 @@ TileBounds boundsOf(const TileGrid& grid, size_t tile, int width, int height) {
     return {x0, y0, std::min(x0 + ts, width) - 1, std::min(y0 + ts, height) - 1};
 }
 
-// The fragments of groups [g, e) of a record of triangle t (the tile's first pixel at depth-buffer
-// index `origin`), written from `dst` on with room for four a group; returns their end. A group's
-// lanes lie in one row (every kernel opens a group per row), and each lane is written whether it
-// is a fragment or not, the end advanced by its bit.
-uint64_t* appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t origin, const FragLayout& layout,
-                       uint64_t* dst) {
-    const int zShift = layout.zShift();
+// The fragments of groups [g, e) of a record of triangle t (tile from (x0, y0) of a viewport
+// `width` pixels wide), written from `dst` on with room for four a group; returns their end. A
+// group's lanes lie in one row (every kernel opens a group per row), and each lane is written
+// whether it is a fragment or not, the end advanced by its bit.
+uint64_t* appendGroups(const FragGroup* g, const FragGroup* e, uint32_t t, uint32_t width, uint32_t x0, uint32_t y0,
+                       const FragLayout& layout, uint64_t* dst) {
+    const int zShift = layout.zShift(), axis = layout.axisBits;
     const uint64_t tri = layout.pack(t, 0, 0);
-    for (; g != e; ++g) {
-        const uint64_t at = tri | (g->pixel - origin);  // + l: the lane's place, within the tile
-        for (uint32_t l = 0; l < 4; ++l) {
-            *dst = (at + l) | uint64_t(g->z[l]) << zShift;
-            dst += g->lanes >> l & 1;
+    const auto append = [&](auto&& placeOf) {
+        for (; g != e; ++g) {
+            const uint64_t at = tri | placeOf(g->pixel);  // + l: the lane's place, within the tile
+            for (uint32_t l = 0; l < 4; ++l) {
+                *dst = (at + l) | uint64_t(g->z[l]) << zShift;
+                dst += g->lanes >> l & 1;
+            }
         }
+    };
+    if (axis == 0) {
+        const uint32_t origin = y0 * width + x0;
+        append([origin](uint32_t pixel) { return uint64_t(pixel - origin); });
+    } else {
+        append([=](uint32_t pixel) {  // one division a group (per fragment, they were most of this loop)
+            const uint32_t y = pixel / width, x = pixel - y * width;
+            return uint64_t(y - y0) << axis | (x - x0);
+        });
     }
     return dst;
 }
@@ -83,7 +98,6 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
                  uint32_t* depth, int bits, const FragLayout& layout, std::vector<FragGroup>& scratch,
                  TileFragments& out) {
     const TileBounds b = boundsOf(grid, tile, width, height);
-    const uint32_t origin = uint32_t(b.y0) * uint32_t(width) + uint32_t(b.x0);
     const uint32_t* recs = plain.bins.begin(tile);
     const size_t n = plain.bins.size(tile);
     out = {};
@@ -104,7 +118,7 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
         uint64_t* dst = out.frag.data();
         for (size_t p = 0; p < n; ++p)
             dst = appendGroups(groups + capture.groupBegin[p], groups + capture.groupEnd[p], triangleOf(recs[p]),
-                               origin, layout, dst);
+                               uint32_t(width), uint32_t(b.x0), uint32_t(b.y0), layout, dst);
         out.frag.resize(count);
         return;
     }
@@ -119,8 +133,8 @@ void captureTile(const RecordSet<EdgeTri>& plain, size_t triangles, const TileGr
                                                 false, bits, fragments, passed, w);
         const size_t at = out.frag.size();
         out.frag.resize(at + 4 * size_t(w - scratch.data()));
-        const uint64_t* end =
-            appendGroups(scratch.data(), w, triangleOf(recs[p]), origin, layout, out.frag.data() + at);
+        const uint64_t* end = appendGroups(scratch.data(), w, triangleOf(recs[p]), uint32_t(width), uint32_t(b.x0),
+                                           uint32_t(b.y0), layout, out.frag.data() + at);
         out.frag.resize(size_t(end - out.frag.data()));
     }
     out.frag.shrink_to_fit();
@@ -148,17 +162,18 @@ struct ViewEvent {
 };
 
 // The fragments [f, e) of one tile (its pixels from (x0, y0)) under F: replayFragments' test and
-// write, one fragment at a time.
-template <DepthFunc F>
+// write, one fragment at a time. XY: the layout's place is x and y (FragLayout::axisBits).
+template <DepthFunc F, bool XY>
 void replayView(const uint64_t* f, const uint64_t* e, const FragLayout& layout, uint32_t* depth, size_t stride, int x0,
                 int y0, bool mask, uint64_t& fragments, uint64_t& passed) {
     uint64_t pass = 0;
     uint32_t* const origin = depth + size_t(y0) * stride + size_t(x0);
-    const int zShift = layout.zShift();
+    const int zShift = layout.zShift(), axis = layout.axisBits;
     const uint64_t placeMask = (uint64_t(1) << layout.placeBits) - 1, zMask = (uint64_t(1) << layout.zBits) - 1;
+    const uint64_t axisMask = (uint64_t(1) << axis) - 1;
     for (const uint64_t* i = f; i != e; ++i) {
         const uint64_t v = *i;
-        uint32_t& d = origin[v & placeMask];
+        uint32_t& d = XY ? origin[size_t(v >> axis & axisMask) * stride + size_t(v & axisMask)] : origin[v & placeMask];
         const uint32_t incoming = uint32_t(v >> zShift & zMask), stored = d;
         const bool ok = depthTest(F, incoming, stored);
         pass += ok;
@@ -171,11 +186,13 @@ void replayView(const uint64_t* f, const uint64_t* e, const FragLayout& layout, 
 using ReplayViewFn = void (*)(const uint64_t*, const uint64_t*, const FragLayout&, uint32_t*, size_t, int, int, bool,
                               uint64_t&, uint64_t&);
 
-template <size_t... F>
+template <bool XY, size_t... F>
 constexpr std::array<ReplayViewFn, 8> replayViewTable(std::index_sequence<F...>) {
-    return {&replayView<DepthFunc(F)>...};
+    return {&replayView<DepthFunc(F), XY>...};
 }
-constexpr std::array<ReplayViewFn, 8> kReplayView = replayViewTable(std::make_index_sequence<8>());
+// By whether the layout's place is x and y (FragLayout::axisBits), then by DepthFunc.
+constexpr std::array<ReplayViewFn, 8> kReplayView[2] = {replayViewTable<false>(std::make_index_sequence<8>()),
+                                                        replayViewTable<true>(std::make_index_sequence<8>())};
 
 }  // namespace
 
@@ -242,8 +259,9 @@ void runFromView(const CommandList& list, const ViewFragments& frags, const Tile
                 }
                 const uint64_t before = out.passed;
                 const uint64_t* const run = tf.data() + f;
-                kReplayView[size_t(e.func)](run, run + (l - f), frags.layout, depth, size_t(width), b.x0, b.y0, e.mask,
-                                            out.fragments, out.passed);
+                kReplayView[frags.layout.axisBits != 0][size_t(e.func)](run, run + (l - f), frags.layout, depth,
+                                                                        size_t(width), b.x0, b.y0, e.mask,
+                                                                        out.fragments, out.passed);
                 countQuery(out, e.query, out.passed - before);
             }
         }

@@ -31,13 +31,15 @@
 namespace cullide::raster::detail {
 
 // A fragment in 64 bits: its triangle above its incoming depth code above its place in the tile
-// (the depth-buffer index from the tile's first pixel: y * width + x, in placeBits), for a
-// geometry, tile size, viewport and depth format whose widths fit (FragLayout::of). With the
-// triangle on top, a tile's fragments (in triangle order) are below t << triShift exactly for the
-// triangles below t, so binary searches find a draw's run. The place as an index, not as x and
-// y, spares the replay a multiplication per fragment (and the capture a division per group).
+// (placeBits), for a geometry, tile size, viewport and depth format whose widths fit
+// (FragLayout::of). With the triangle on top, a tile's fragments (in triangle order) are below
+// t << triShift exactly for the triangles below t, so binary searches find a draw's run.
+// The place is the depth-buffer index from the tile's first pixel (y * width + x), which spares
+// the replay a multiplication per fragment (and the capture a division per group); where that
+// does not fit (a wide viewport with float depth and a large geometry), x and y in axisBits each.
 struct FragLayout {
     int placeBits = 0, zBits = 0, triBits = 0;
+    int axisBits = 0;  // 0: the place is an index; else x | y << axisBits
     // The layout for these, or placeBits 0 when they need more than 64 bits (then no capture).
     static FragLayout of(size_t triangles, int tileSize, int width, int height, const DepthFormat& format);
     int zShift() const { return placeBits; }
