@@ -197,7 +197,7 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     // the groups of their boxes are empty) and each miss flushed the depth work after it. The
     // second runs the kept groups in the same order: the same fragments, tests, writes and records
     // as one pass.
-    constexpr int kBatch = 512;  // groups kept before the second pass; a row has at most 257
+    constexpr int kBatch = 512;  // groups kept before the second pass; a row has at most 256 (1024 px tiles)
     uint32_t kept[kBatch];
     double rowZ[kBatch];  // DepthPlane::row of the batch's rows, from its first
     int batchY = y0;
