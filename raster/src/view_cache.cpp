@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <type_traits>
 
 namespace cullide::raster::detail {
 
@@ -171,14 +172,19 @@ void replayView(const uint64_t* f, const uint64_t* e, const FragLayout& layout, 
     const int zShift = layout.zShift(), axis = layout.axisBits;
     const uint64_t placeMask = (uint64_t(1) << layout.placeBits) - 1, zMask = (uint64_t(1) << layout.zBits) - 1;
     const uint64_t axisMask = (uint64_t(1) << axis) - 1;
-    for (const uint64_t* i = f; i != e; ++i) {
-        const uint64_t v = *i;
-        uint32_t& d = XY ? origin[size_t(v >> axis & axisMask) * stride + size_t(v & axisMask)] : origin[v & placeMask];
-        const uint32_t incoming = uint32_t(v >> zShift & zMask), stored = d;
-        const bool ok = depthTest(F, incoming, stored);
-        pass += ok;
-        d = ok && mask ? incoming : stored;
-    }
+    const auto run = [&](auto write) {
+        for (const uint64_t* i = f; i != e; ++i) {
+            const uint64_t v = *i;
+            uint32_t& d =
+                XY ? origin[size_t(v >> axis & axisMask) * stride + size_t(v & axisMask)] : origin[v & placeMask];
+            const uint32_t incoming = uint32_t(v >> zShift & zMask), stored = d;
+            const bool ok = depthTest(F, incoming, stored);
+            pass += ok;
+            if (decltype(write)::value && ok) d = incoming;
+        }
+    };
+    if (mask) run(std::true_type());  // the mask decided once, not per fragment
+    else run(std::false_type());
     fragments += uint64_t(e - f);
     passed += pass;
 }
