@@ -235,6 +235,7 @@ void runFromView(const CommandList& list, const ViewFragments& frags, const Tile
         }
         events.push_back(e);
     }
+    const std::array<ReplayViewFn, 8>& replay = kReplayView[frags.layout.axisBits != 0];
     parallelFor(0, grid.count(), 1, [&](const tbb::blocked_range<size_t>& r) {
         for (size_t tile = r.begin(); tile != r.end(); ++tile) {
             TileOut& out = tileOut[tile];
@@ -265,9 +266,8 @@ void runFromView(const CommandList& list, const ViewFragments& frags, const Tile
                 }
                 const uint64_t before = out.passed;
                 const uint64_t* const run = tf.data() + f;
-                kReplayView[frags.layout.axisBits != 0][size_t(e.func)](run, run + (l - f), frags.layout, depth,
-                                                                        size_t(width), b.x0, b.y0, e.mask,
-                                                                        out.fragments, out.passed);
+                replay[size_t(e.func)](run, run + (l - f), frags.layout, depth, size_t(width), b.x0, b.y0, e.mask,
+                                       out.fragments, out.passed);
                 countQuery(out, e.query, out.passed - before);
             }
         }
