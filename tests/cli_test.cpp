@@ -53,8 +53,11 @@ std::string readTree(const fs::path& dir) {
     return all;
 }
 
+// A folder of its own under this process's temporary folder, which goes when the process ends
+// (one test process per case under ctest: a folder left per process adds up).
 fs::path freshDir(const std::string& name) {
-    fs::path d = fs::temp_directory_path() / ("cullide_cli_test_" + std::to_string(::getpid())) / name;
+    static const cullide::test::TempDir root;
+    fs::path d = root / name;
     fs::remove_all(d);
     fs::create_directories(d);
     return d;

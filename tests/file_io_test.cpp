@@ -2,6 +2,7 @@
 #include "cullide/file_io.h"
 
 #include "cullide/error.h"
+#include "test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -17,8 +18,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A folder of its own under this process's temporary folder, which goes when the process ends.
 fs::path freshDir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("cullide_file_io_test_" + std::to_string(::getpid())) / name;
+    static const test::TempDir root;
+    const fs::path d = root / name;
     fs::remove_all(d);
     fs::create_directories(d);
     return d;

@@ -367,16 +367,13 @@ TEST(Validate, CommandReportsRatesAndExitsZeroWhenEverythingIsInside) {
 TEST(Validate, GlNotBuiltIsSaid) {
     if (raster::glBuilt()) GTEST_SKIP() << "GL is built";
     const std::string cow = std::string("'") + CULLIDE_DATA_DIR + "/meshes/cow.off'";
-    const std::filesystem::path out =
-        std::filesystem::temp_directory_path() / ("cullide_nogl_" + std::to_string(getpid()));
-    std::filesystem::create_directories(out);
-    const std::string study = "study --scenes bunny:500 --backends gl --no-oracle -q -o '" + out.string() + "/s.csv'";
+    const test::TempDir out;
+    const std::string study = "study --scenes bunny:500 --backends gl --no-oracle -q -o '" + out.path().string() + "/s.csv'";
     for (const std::string& args : {"prune " + cow + " --backend gl", "validate " + cow, study}) {
         const auto [status, text] = cli(args);
         EXPECT_EQ(status, 2) << args << ": " << text;
         EXPECT_NE(text.find(raster::kGlNotBuilt), std::string::npos) << args << ": " << text;
     }
-    std::filesystem::remove_all(out);
 }
 
 }  // namespace

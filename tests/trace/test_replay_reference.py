@@ -34,7 +34,11 @@ def run(*args):
 
 
 def main():
-    tmp = tempfile.mkdtemp(prefix="cullide-trace-")
+    with tempfile.TemporaryDirectory(prefix="cullide-trace-") as tmp:  # gone when the checks end
+        return checks(tmp)
+
+
+def checks(tmp):
     valid = os.path.join(tmp, "valid.trace")
     results = os.path.join(tmp, "valid.json")
     subprocess.run([sys.executable, MAKER, valid], check=True)
