@@ -28,9 +28,10 @@
 //   BM_Hierarchy/<kind>/<triangles>: building one object's hierarchy (the per-frame cost the
 //     paper's method pays instead of preprocessing); kind 0 = connectivity, 1 = random. Wall
 //     time: nodes of 2^16 triangles and more build their subtrees in parallel. Counters:
-//     cpu_ms, the CPU time of all threads per build; x_90b80f8 (connectivity), commit 90b80f8's
-//     build time (one thread, so its CPU time is its wall time) over this run's wall time (see
-//     kConnectivityMs90b80f8): meaningful only on an otherwise idle machine.
+//     cpu_ms, the CPU time of all threads per build; for connectivity, x_90b80f8: commit
+//     90b80f8's build (peers/hierarchy_90b80f8.h, one thread, run in this process right after
+//     the timed loop, best of its runs) over this run's wall time, and same_90b80f8: 1 when its
+//     hierarchy equals today's (nodes and order).
 //   BM_ChosenDirections/<case>: chosen directions against the axes (docs/cullide.md#chosen-directions),
 //     both timed in every iteration (thread CPU time), the ratio printed as x_axes (the axes' time
 //     over the chosen one's: above 1 is faster). case 0 = coherent over the 16 frames of the 50k
@@ -48,6 +49,7 @@
 #include "cullide/scene_io.h"
 
 #include "bench_util.h"
+#include "peers/hierarchy_90b80f8.h"
 
 #include <benchmark/benchmark.h>
 
@@ -55,6 +57,7 @@
 #include <array>
 #include <chrono>
 #include <ctime>
+#include <limits>
 #include <map>
 #include <memory>
 #include <utility>
@@ -230,16 +233,6 @@ BENCHMARK(BM_PruneToExact)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// The connectivity build's CPU time per hierarchy (ms) at commit 90b80f8, before the build moved
-// to flat arrays (vectors per set and per piece, searches over triangle ids), by BM_Hierarchy's
-// triangle count. Measured on the project's 2-core shared build machine (AMD EPYC, Release,
-// GCC 12): this benchmark's binary linked against that commit's core/src/hierarchy.cpp instead
-// of today's, run with --benchmark_filter=BM_Hierarchy/kind:0 --benchmark_repetitions=3, the
-// median of the CPU column; the 1M figure in issue 16 (~770 ms) was a wall time. Ratios against
-// these mean something only on a comparable machine (the shared machine alone varies by 30%).
-// Measured 2026-11-22 at load average ~3.5 on the 2 cores.
-constexpr std::pair<int64_t, double> kConnectivityMs90b80f8[] = {{5000, 2.24}, {270000, 180.0}, {1000000, 671.0}};
-
 void BM_Hierarchy(benchmark::State& state) {
     const Scene& scene = paperScene(0, size_t(state.range(1)));
     HierarchyOptions o;
@@ -254,9 +247,26 @@ void BM_Hierarchy(benchmark::State& state) {
     state.counters["cpu_ms"] = (processCpuMs() - cpuBegin) / double(state.iterations());
     state.counters["Mtri/s"] =
         benchmark::Counter(double(mesh.triangleCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
-    for (const auto& [triangles, oldMs] : kConnectivityMs90b80f8)
-        if (o.kind == HierarchyKind::Connectivity && triangles == state.range(1))
-            state.counters["x_90b80f8"] = oldMs / wallMs;
+    if (o.kind != HierarchyKind::Connectivity) return;
+    // Issue 16's row: 90b80f8's build on the same mesh, the best of as many runs as fit in about
+    // a second (one at 1M triangles), and whether it builds the same hierarchy.
+    double peerMs = std::numeric_limits<double>::infinity(), spentMs = 0;
+    Hierarchy peer;
+    while (spentMs < 1000) {
+        const auto t = std::chrono::steady_clock::now();
+        peer = peer90b80f8::buildConnectivityHierarchy(mesh, o);
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+        peerMs = std::min(peerMs, ms), spentMs += ms;
+    }
+    const Hierarchy ours = buildHierarchy(mesh, o);
+    const bool sameNodes = std::equal(ours.nodes.begin(), ours.nodes.end(), peer.nodes.begin(), peer.nodes.end(),
+                                      [](const HierarchyNode& a, const HierarchyNode& b) {
+                                          return a.first == b.first && a.count == b.count &&
+                                              a.firstChild == b.firstChild && a.childCount == b.childCount &&
+                                              a.depth == b.depth;
+                                      });
+    state.counters["x_90b80f8"] = peerMs / wallMs;
+    state.counters["same_90b80f8"] = sameNodes && ours.order == peer.order ? 1 : 0;
 }
 BENCHMARK(BM_Hierarchy)
     ->ArgNames({"kind", "tris"})
