@@ -183,16 +183,21 @@ private:
         Pages<uint32_t>& slots = rows_[0];
         slots.resize(3 * size_t(n));
         overflow_.clear();
-        auto rowOf = [&](uint32_t t, std::vector<uint32_t>& row) {
-            const Triangle& tri = mesh_.triangles[t];
+        // The arrays as local pointers, and the triangle by value: a push_back may write any
+        // uint32_t as far as the compiler knows, which made it reload them all after each one.
+        const Triangle* const tris = mesh_.triangles.data();
+        const uint32_t* const inc = incident.data();
+        const uint32_t* const vs = vstart.data();
+        auto rowOf = [tris, inc, vs](uint32_t t, std::vector<uint32_t>& row) {
+            const Triangle tri = tris[t];
             row.clear();
             for (int e = 0; e < 3; ++e) {
                 const uint32_t a = tri[e], b = tri[(e + 1) % 3];
                 if (a == b) continue;
-                for (uint32_t k = vstart[a]; k < vstart[a + 1]; ++k) {
-                    const uint32_t u = incident[k];
+                for (const uint32_t *k = inc + vs[a], *end = inc + vs[a + 1]; k != end; ++k) {
+                    const uint32_t u = *k;
                     if (u == t) continue;
-                    const Triangle& other = mesh_.triangles[u];
+                    const Triangle& other = tris[u];
                     if (other[0] == b || other[1] == b || other[2] == b) row.push_back(u);
                 }
             }
