@@ -491,21 +491,25 @@ private:
         if (needsRows(f, half) || needsRows(n - f, k - half)) {
             // Each half's rows keep the neighbours in that half, in place (the position itself
             // elsewhere), written to the other row array: the halves read them from there.
+            // Whether a neighbour q lies in np's half [a, a + w) is one unsigned comparison, and
+            // the row is written without a branch on it (which went either way at a half's rim).
+            // The arrays as locals: through the closure GCC reloaded them every position.
             const uint32_t mid = lo + f;
-            blocks(lo, hi, [&](uint32_t begin, uint32_t end) {
+            const uint32_t* const mark = mark_.data();
+            blocks(lo, hi, [=](uint32_t begin, uint32_t end) {
                 for (uint32_t p = begin; p < end; ++p) {
-                    const uint32_t np = mark_[p];
-                    const uint32_t a = np < mid ? lo : mid, b = np < mid ? mid : hi;
+                    const uint32_t np = mark[p];
+                    const uint32_t a = np < mid ? lo : mid, w = np < mid ? mid - lo : hi - mid;
                     const uint32_t* slot = rows + 3 * size_t(p);
                     uint32_t* out = other + 3 * size_t(np);
                     if (slot[0] == kEscape) {
                         std::copy(slot, slot + 3, out);
                         continue;
                     }
-                    for (int i = 0; i < 3; ++i) {
-                        const uint32_t q = mark_[slot[i]];
-                        out[i] = q >= a && q < b ? q : np;
-                    }
+                    const uint32_t q0 = mark[slot[0]], q1 = mark[slot[1]], q2 = mark[slot[2]];
+                    out[0] = q0 - a < w ? q0 : np;
+                    out[1] = q1 - a < w ? q1 : np;
+                    out[2] = q2 - a < w ? q2 : np;
                 }
             });
         }
