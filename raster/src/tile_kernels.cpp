@@ -130,6 +130,7 @@ __attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x
         else *d = uint32_t(_mm_cvtsi128_si32(v));
     };
     uint64_t frag = 0, pass = 0;
+    [[maybe_unused]] FragGroup* out = rec;  // a local cursor, as rasterizeInTileAvx2's
     for (int j = y0; j <= y1; j += 2, e[0] = _mm256_add_epi64(e[0], down[0]), e[1] = _mm256_add_epi64(e[1], down[1]),
              e[2] = _mm256_add_epi64(e[2], down[2])) {
         const bool tall = j < y1;
@@ -145,13 +146,13 @@ __attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x
         const int top = inside & 3, bottom = inside >> 2;
         if constexpr (Record) {
             if (top) {
-                FragGroup* g = rec++;
+                FragGroup* g = out++;
                 g->pixel = uint32_t(size_t(j) * stride + size_t(x0));
                 g->lanes = uint32_t(top) | wholeFlag;
                 _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), incoming);
             }
             if (bottom) {
-                FragGroup* g = rec++;
+                FragGroup* g = out++;
                 g->pixel = uint32_t(size_t(j + 1) * stride + size_t(x0));
                 g->lanes = uint32_t(bottom) | wholeFlag;
                 _mm_storeu_si128(reinterpret_cast<__m128i*>(g->z), _mm_srli_si128(incoming, 8));
@@ -169,6 +170,7 @@ __attribute__((target("avx2"))) void rasterizeNarrowAvx2(const EdgeTri& t, int x
             storeRow(d0, written);
         }
     }
+    if constexpr (Record) rec = out;
     fragments += frag;
     passed += pass;
 }
@@ -191,6 +193,10 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
     const __m256d offsets = _mm256_set_pd(3.5, 2.5, 1.5, 0.5);
     const __m256d planeX0 = _mm256_set1_pd(t.plane.x0), dzdx = _mm256_set1_pd(t.plane.dzdx);
     uint64_t frag = 0, pass = 0;
+    // The recording cursor as a local (written back at the end): through the reference, each
+    // group loaded and stored it, the vector stores in between (which may alias anything) keeping
+    // it in memory.
+    [[maybe_unused]] FragGroup* out = rec;
     // Two passes over batches of rows. The first tests every group's edges and keeps the groups
     // with fragments, as (row, column, lanes) in 32 bits (pixel indices are below 2^14), without a
     // branch on whether a group has any: on small triangles that branch went either way (half of
@@ -217,7 +223,7 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
             // the tile's right edge masked.
             const bool whole = i + 3 <= bx1;
             if constexpr (Record) {
-                FragGroup* r = rec++;
+                FragGroup* r = out++;
                 r->pixel = uint32_t(size_t(j) * stride + size_t(i));
                 r->lanes = uint32_t(inside) | (whole ? kWholeGroup : 0);
                 _mm_storeu_si128(reinterpret_cast<__m128i*>(r->z), incoming);
@@ -258,6 +264,7 @@ __attribute__((target("avx2"))) void rasterizeInTileAvx2(const EdgeTri& t, int b
         }
     }
     runKept(n);
+    if constexpr (Record) rec = out;
     fragments += frag;
     passed += pass;
 }
