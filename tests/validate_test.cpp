@@ -368,7 +368,8 @@ TEST(Validate, GlNotBuiltIsSaid) {
     if (raster::glBuilt()) GTEST_SKIP() << "GL is built";
     const std::string cow = std::string("'") + CULLIDE_DATA_DIR + "/meshes/cow.off'";
     const test::TempDir out;
-    const std::string study = "study --scenes bunny:500 --backends gl --no-oracle -q -o '" + out.path().string() + "/s.csv'";
+    const std::string study =
+        "study --scenes bunny:500 --backends gl --no-oracle -q -o '" + out.path().string() + "/s.csv'";
     for (const std::string& args : {"prune " + cow + " --backend gl", "validate " + cow, study}) {
         const auto [status, text] = cli(args);
         EXPECT_EQ(status, 2) << args << ": " << text;
