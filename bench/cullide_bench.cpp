@@ -29,7 +29,7 @@
 //     paper's method pays instead of preprocessing); kind 0 = connectivity, 1 = random. Wall
 //     time: nodes of 2^16 triangles and more build their subtrees in parallel. Counters:
 //     cpu_ms, the CPU time of all threads per build; for connectivity, x_90b80f8: commit
-//     90b80f8's build (peers/hierarchy_90b80f8.h, one thread, run in this process right after
+//     90b80f8's build (tests/hierarchy_90b80f8.h, one thread, run in this process right after
 //     the timed loop, best of its runs) over this run's wall time, and same_90b80f8: 1 when its
 //     hierarchy equals today's (nodes and order).
 //   BM_ChosenDirections/<case>: chosen directions against the axes (docs/cullide.md#chosen-directions),
@@ -49,7 +49,7 @@
 #include "cullide/scene_io.h"
 
 #include "bench_util.h"
-#include "peers/hierarchy_90b80f8.h"
+#include "hierarchy_90b80f8.h"  // tests/
 
 #include <benchmark/benchmark.h>
 
@@ -258,15 +258,8 @@ void BM_Hierarchy(benchmark::State& state) {
         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
         peerMs = std::min(peerMs, ms), spentMs += ms;
     }
-    const Hierarchy ours = buildHierarchy(mesh, o);
-    const bool sameNodes = std::equal(ours.nodes.begin(), ours.nodes.end(), peer.nodes.begin(), peer.nodes.end(),
-                                      [](const HierarchyNode& a, const HierarchyNode& b) {
-                                          return a.first == b.first && a.count == b.count &&
-                                              a.firstChild == b.firstChild && a.childCount == b.childCount &&
-                                              a.depth == b.depth;
-                                      });
     state.counters["x_90b80f8"] = peerMs / wallMs;
-    state.counters["same_90b80f8"] = sameNodes && ours.order == peer.order ? 1 : 0;
+    state.counters["same_90b80f8"] = peer90b80f8::sameHierarchy(buildHierarchy(mesh, o), peer) ? 1 : 0;
 }
 BENCHMARK(BM_Hierarchy)
     ->ArgNames({"kind", "tris"})

@@ -1,18 +1,17 @@
 // Hierarchies: structure invariants, connectivity, determinism, soups; the connectivity build
-// against a plain reference implementation of the same algorithm.
+// against commit 90b80f8's build of the same algorithm (hierarchy_90b80f8.h).
 #include "cullide/hierarchy.h"
 
 #include "cullide/error.h"
 #include "cullide/mesh_io.h"
+#include "hierarchy_90b80f8.h"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <limits>
 #include <numeric>
 #include <random>
-#include <span>
 #include <string>
 
 using namespace cullide;
@@ -91,136 +90,6 @@ bool connected(const Mesh& m, const Hierarchy& h, const HierarchyNode& n) {
     return reached == tris.size();
 }
 
-// The connectivity hierarchy as first written (core/src/hierarchy.cpp up to commit 90b80f8):
-// the same recursive graph-growing bisection over triangle ids, with a vector per set, per
-// piece and per part. Kept as the specification the flat-array build must reproduce exactly,
-// node for node and triangle for triangle (every prune's PCS depends on the hierarchy).
-class ReferenceConnectivity {
-public:
-    ReferenceConnectivity(const Mesh& mesh, uint32_t leafSize, uint32_t branching)
-        : mesh_(mesh), leafSize_(leafSize), branching_(branching), label_(mesh.triangles.size(), kNone) {
-        const size_t n = mesh.triangles.size();
-        start_.assign(n + 1, 0);
-        std::vector<std::vector<uint32_t>> incident(mesh.positions.size());
-        for (uint32_t t = 0; t < n; ++t)
-            for (uint32_t v : mesh.triangles[t]) incident[v].push_back(t);
-        for (uint32_t t = 0; t < n; ++t) {
-            const Triangle& tri = mesh.triangles[t];
-            std::vector<uint32_t> row;
-            for (int e = 0; e < 3; ++e) {
-                const uint32_t a = tri[e], b = tri[(e + 1) % 3];
-                if (a == b) continue;
-                for (uint32_t u : incident[a]) {
-                    const Triangle& o = mesh.triangles[u];
-                    if (u != t && (o[0] == b || o[1] == b || o[2] == b)) row.push_back(u);
-                }
-            }
-            std::sort(row.begin(), row.end());
-            row.erase(std::unique(row.begin(), row.end()), row.end());
-            next_.insert(next_.end(), row.begin(), row.end());
-            start_[t + 1] = uint32_t(next_.size());
-        }
-    }
-
-    Hierarchy build() {
-        const uint32_t n = uint32_t(mesh_.triangles.size());
-        h_.order.resize(n);
-        std::iota(h_.order.begin(), h_.order.end(), 0u);
-        h_.nodes.push_back({0, n, 0, 0, 0});
-        split(0);
-        return h_;
-    }
-
-private:
-    static constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
-    static constexpr uint32_t kOpen = kNone - 1, kVisited = kNone - 2, kFirst = kNone - 3;
-
-    std::span<const uint32_t> neighbours(uint32_t t) const {
-        return {next_.data() + start_[t], start_[t + 1] - start_[t]};
-    }
-
-    void split(uint32_t nodeIndex) {
-        const HierarchyNode node = h_.nodes[nodeIndex];
-        if (node.count <= leafSize_) return;
-        std::vector<uint32_t> sizes;
-        partition(std::span<uint32_t>(h_.order.data() + node.first, node.count),
-                  std::min<uint32_t>(branching_, node.count), sizes, kNone);
-        const uint32_t firstChild = uint32_t(h_.nodes.size());
-        h_.nodes[nodeIndex].firstChild = firstChild;
-        h_.nodes[nodeIndex].childCount = uint32_t(sizes.size());
-        uint32_t first = node.first;
-        for (uint32_t size : sizes) {
-            h_.nodes.push_back({first, size, 0, 0, node.depth + 1});
-            first += size;
-        }
-        for (uint32_t i = 0; i < sizes.size(); ++i) split(firstChild + i);
-    }
-
-    void partition(std::span<uint32_t> set, uint32_t k, std::vector<uint32_t>& sizes, uint32_t hint) {
-        if (k < 2 || set.size() < 2) {
-            sizes.push_back(uint32_t(set.size()));
-            return;
-        }
-        const uint32_t half = k / 2;
-        const size_t target = std::max<size_t>(1, set.size() * half / k);
-        for (uint32_t t : set) label_[t] = kOpen;
-        const uint32_t seed = hint != kNone ? hint : farthest(set[0]);
-        std::vector<uint32_t> bfs;
-        size_t scan = 0;
-        uint32_t start = seed;
-        while (bfs.size() < set.size()) {
-            label_[start] = kVisited;
-            bfs.push_back(start);
-            for (size_t head = bfs.size() - 1; head < bfs.size(); ++head)
-                for (uint32_t u : neighbours(bfs[head]))
-                    if (label_[u] == kOpen) label_[u] = kVisited, bfs.push_back(u);
-            while (scan < set.size() && label_[set[scan]] != kOpen) ++scan;
-            if (scan < set.size()) start = set[scan];
-        }
-        for (size_t i = 0; i < bfs.size(); ++i) label_[bfs[i]] = i < target ? kFirst : kOpen;
-        std::vector<std::vector<uint32_t>> pieces;
-        for (size_t i = target; i < bfs.size(); ++i) {
-            if (label_[bfs[i]] != kOpen) continue;
-            std::vector<uint32_t>& piece = pieces.emplace_back(1, bfs[i]);
-            label_[bfs[i]] = kVisited;
-            for (size_t head = 0; head < piece.size(); ++head)
-                for (uint32_t u : neighbours(piece[head]))
-                    if (label_[u] == kOpen) label_[u] = kVisited, piece.push_back(u);
-        }
-        size_t largest = 0;
-        for (size_t p = 1; p < pieces.size(); ++p)
-            if (pieces[p].size() > pieces[largest].size()) largest = p;
-        std::vector<uint32_t> first(bfs.begin(), bfs.begin() + target), second;
-        for (size_t p = 0; p < pieces.size(); ++p) {
-            bool touchesFirst = false;
-            for (uint32_t t : pieces[p])
-                for (uint32_t u : neighbours(t)) touchesFirst = touchesFirst || label_[u] == kFirst;
-            std::vector<uint32_t>& to = (p != largest && touchesFirst) ? first : second;
-            to.insert(to.end(), pieces[p].begin(), pieces[p].end());
-        }
-        for (uint32_t t : set) label_[t] = kNone;
-        std::copy(second.begin(), second.end(), std::copy(first.begin(), first.end(), set.begin()));
-        const uint32_t firstHint = first.back(), secondHint = second.back();
-        partition(set.subspan(0, first.size()), half, sizes, firstHint);
-        partition(set.subspan(first.size()), k - half, sizes, secondHint);
-    }
-
-    uint32_t farthest(uint32_t from) {
-        std::vector<uint32_t> queue{from};
-        label_[from] = kVisited;
-        for (size_t head = 0; head < queue.size(); ++head)
-            for (uint32_t u : neighbours(queue[head]))
-                if (label_[u] == kOpen) label_[u] = kVisited, queue.push_back(u);
-        for (uint32_t t : queue) label_[t] = kOpen;
-        return queue.back();
-    }
-
-    const Mesh& mesh_;
-    uint32_t leafSize_, branching_;
-    std::vector<uint32_t> label_, start_, next_;
-    Hierarchy h_;
-};
-
 // Expects the default hierarchy of `m` built on every thread to equal the one built on one.
 void expectSameWithOneThread(const Mesh& m) {
     const HierarchyOptions o;
@@ -235,14 +104,15 @@ void expectSameWithOneThread(const Mesh& m) {
             << "node " << i;
 }
 
-// Expects buildHierarchy's connectivity hierarchy to equal the reference's for every leaf size
-// and branching given.
+// Expects buildHierarchy's connectivity hierarchy to equal the reference's (the build as first
+// written, up to commit 90b80f8: hierarchy_90b80f8.h) for every leaf size and branching given.
 void expectSameAsReference(const Mesh& m, std::initializer_list<uint32_t> leafSizes,
                            std::initializer_list<uint32_t> branchings, const std::string& what) {
     for (uint32_t leaf : leafSizes)
         for (uint32_t branching : branchings) {
-            const Hierarchy want = ReferenceConnectivity(m, leaf, branching).build();
-            const Hierarchy got = buildHierarchy(m, {HierarchyKind::Connectivity, leaf, branching, 1});
+            const HierarchyOptions o{HierarchyKind::Connectivity, leaf, branching, 1};
+            const Hierarchy want = peer90b80f8::buildConnectivityHierarchy(m, o);
+            const Hierarchy got = buildHierarchy(m, o);
             SCOPED_TRACE(what + " leaf " + std::to_string(leaf) + " branching " + std::to_string(branching));
             ASSERT_EQ(got.order, want.order);
             ASSERT_EQ(got.nodes.size(), want.nodes.size());

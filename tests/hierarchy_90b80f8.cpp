@@ -1,6 +1,5 @@
-// Commit 90b80f8's connectivity hierarchy build (core/src/hierarchy.cpp there), frozen as
-// BM_Hierarchy's peer (hierarchy_90b80f8.h): its code as it was, less the random kind, the
-// option parsing and Hierarchy::depth (today's types are the same).
+// Commit 90b80f8's connectivity hierarchy build (hierarchy_90b80f8.h): its code as it was, less
+// the random kind, the option parsing and Hierarchy::depth (today's types are the same).
 #include "hierarchy_90b80f8.h"
 
 #include "cullide/error.h"
@@ -195,6 +194,15 @@ Hierarchy buildConnectivityHierarchy(const Mesh& mesh, const HierarchyOptions& o
     Hierarchy h;
     Builder(mesh, options, h).build();
     return h;
+}
+
+bool sameHierarchy(const Hierarchy& a, const Hierarchy& b) {
+    return a.order == b.order &&
+        std::equal(a.nodes.begin(), a.nodes.end(), b.nodes.begin(), b.nodes.end(),
+                   [](const HierarchyNode& x, const HierarchyNode& y) {
+                       return x.first == y.first && x.count == y.count && x.firstChild == y.firstChild &&
+                           x.childCount == y.childCount && x.depth == y.depth;
+                   });
 }
 
 }  // namespace cullide::peer90b80f8
