@@ -183,8 +183,8 @@ private:
         Pages<uint32_t>& slots = rows_[0];
         slots.resize(3 * size_t(n));
         overflow_.clear();
-        // The arrays as local pointers, and the triangle by value: a push_back may write any
-        // uint32_t as far as the compiler knows, which made it reload them all after each one.
+        // The arrays as local pointers, and the triangle by value: push_back's out-of-line growth
+        // may change anything the closure reaches, so GCC reloaded each of them per candidate.
         const Triangle* const tris = mesh_.triangles.data();
         const uint32_t* const inc = incident.data();
         const uint32_t* const vs = vstart.data();
