@@ -58,6 +58,8 @@ uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
 // bisection the rows of both halves are rebuilt, restricted to themselves, into the other of two
 // row arrays (so no copy back; a range's rows are in one, its halves' in the other). So a search
 // needs no membership test, and a patch's triangles sit next to each other in memory.
+// That holds down to nodes of kInPlaceNode triangles; a smaller node's subtree is split in place
+// (Builder::InPlace): its parts are lists of positions, told apart by their labels.
 //
 // A row is three slots (a triangle has three edges), unused ones holding the position itself: a
 // triangle is labelled kVisited before its row is read, so it never passes for an open or first
@@ -109,6 +111,9 @@ struct Scratch {
 // Nodes of at least this many triangles split their children in parallel (a 1M-triangle build
 // has 16 such nodes at leaf size 16, branching 4; smaller subtrees are not worth a task).
 constexpr uint32_t kParallelNode = 1 << 16;
+// Nodes of fewer triangles are split in place (Builder::InPlace).
+constexpr uint32_t kInPlaceNode = 1 << 16;
+static_assert(kInPlaceNode <= kParallelNode, "a subtree split in place runs on one thread");
 
 class Builder {
 public:
@@ -128,7 +133,7 @@ public:
         out_.nodes.push_back({0, n, 0, 0, 0});
         if (n <= opt_.leafSize) return;  // a leaf root: no adjacency to build
         if (opt_.kind == HierarchyKind::Connectivity) {
-            CULLIDE_CHECK(n < kFirst, "triangle count leaves room for the labels");
+            CULLIDE_CHECK(n < kFirst - kInPlaceNode, "triangle count leaves room for the labels");
             // Slack for a slice per parallel subtree: each level of parallel subtrees divides it
             // by the branching (a 1M build has two such levels); where it runs out, a subtree
             // allocates its own scratch.
@@ -236,6 +241,55 @@ private:
         rows_[1] = std::move(incident);
     }
 
+    // A subtree of fewer than kInPlaceNode triangles is split in place: its bisections reorder a
+    // list of its positions (ord) and leave the positions, their rows and their triangle ids
+    // where they are; the triangle ids move once, when the whole subtree is split. A search keeps
+    // to its part by labels alone: the rows reach the whole subtree, where every position outside
+    // the part is labelled neither kOpen nor the part's first-part label (each bisection has its
+    // own, counting down from kFirst). Above that size each bisection moves its positions and
+    // rebuilds its halves' rows (partition()), which keeps a part compact in memory but costs two
+    // passes over it; below, the passes cost more than the compactness saved. The 1M-triangle
+    // bunny on one thread, in place below 2^10, 2^12, 2^14, 2^16 triangles: 470-480, 466-470,
+    // 454, 440-446 ms, against 514-517 ms moving at every bisection (the same hierarchy).
+    struct InPlace {
+        uint32_t lo, hi;  // the subtree's positions
+        const uint32_t* rows;  // their rows, restricted to [lo, hi)
+        uint32_t* pieces;  // the pieces of the part at ord + j go to pieces + j
+        uint32_t* ord;  // the subtree's order: position ord[j] ends at lo + j
+        uint32_t first;  // the next bisection's first-part label
+    };
+
+    void splitInPlace(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s, Part part) {
+        const uint32_t lo = nodes[i].first, n = nodes[i].count;
+        // The other row array's slots of the range are free: the subtree writes no rows.
+        uint32_t* other = rows_[1 - part.rows].data() + 3 * size_t(lo);
+        InPlace in{lo, lo + n, rows_[part.rows].data(), other, other + n, kFirst};
+        for (uint32_t j = 0; j < n; ++j) in.ord[j] = lo + j;
+        split(nodes, i, s, part, &in);
+        // The triangle ids in the subtree's order (the queue is free by now).
+        for (uint32_t j = 0; j < n; ++j) s.queue[j] = out_.order[in.ord[j]];
+        std::copy(s.queue, s.queue + n, out_.order.begin() + lo);
+        if (!posOf_.empty())
+            for (uint32_t p = lo; p < lo + n; ++p)  // read concurrently by forNeighbours of other ranges
+                std::atomic_ref<uint32_t>(posOf_[out_.order[p]]).store(p, std::memory_order_relaxed);
+    }
+
+    // partition() in a subtree split in place: reorders in.ord[at, at + n) into k parts.
+    void partitionInPlace(Scratch& s, InPlace& in, uint32_t at, uint32_t n, uint32_t k, uint32_t hint, bool searched) {
+        if (k < 2 || n < 2) {
+            s.sizes.push_back({n, searched, 0});
+            return;
+        }
+        const uint32_t half = k / 2;
+        const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
+        uint32_t* list = in.ord + at;
+        const auto [f, firstSearched, secondSearched] =
+            bisect(s, in.rows, in.pieces + at, in.lo, in.hi, list, n, target, hint, in.first--);
+        std::copy(s.queue, s.queue + n, list);
+        partitionInPlace(s, in, at, f, half, list[f - 1], firstSearched);
+        partitionInPlace(s, in, at + f, n - f, k - half, list[n - 1], secondSearched);
+    }
+
     // Splits nodes[i] and its descendants, appending them to `nodes` depth first: a node's
     // children are contiguous, followed by the first child's descendants, then the second's, ...
     //
@@ -248,13 +302,23 @@ private:
     // `part`: the node as a part of its parent's partition. part.searched: the node's order is a
     // breadth-first order of the whole node from its first position, so that search's farthest
     // position is known: the last one. part.rows: the row array holding the node's rows.
-    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s, Part part) {
+    //
+    // `in`: the subtree this node lies in, when that is split in place (see InPlace).
+    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s, Part part, InPlace* in = nullptr) {
         const HierarchyNode node = nodes[i];
         if (node.count <= opt_.leafSize) return;
+        if (opt_.kind == HierarchyKind::Connectivity && !in && node.count < kInPlaceNode) {
+            splitInPlace(nodes, i, s, part);
+            return;
+        }
         const uint32_t k = std::min<uint32_t>(opt_.branching, node.count);
         // s.sizes is a stack: this node's children stay on it while their subtrees push theirs.
         const size_t base = s.sizes.size();
-        if (opt_.kind == HierarchyKind::Connectivity) {
+        if (in) {
+            const uint32_t at = node.first - in->lo;
+            partitionInPlace(s, *in, at, node.count, k, part.searched ? in->ord[at + node.count - 1] : kNone,
+                             part.searched);
+        } else if (opt_.kind == HierarchyKind::Connectivity) {
             const uint32_t hi = node.first + node.count;
             partition(s, node.first, hi, k, part.searched ? hi - 1 : kNone, part.searched, part.rows);
         } else {
@@ -274,7 +338,7 @@ private:
             first += size;
         }
         if (node.count < kParallelNode) {
-            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s, s.sizes[base + c]);
+            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s, s.sizes[base + c], in);
             s.sizes.resize(base);
             return;
         }
@@ -370,43 +434,43 @@ private:
         return size;
     }
 
-    // Whether a part of a bisection will be bisected again, or become a node that is split: only
-    // then does it need rows.
-    bool needsRows(uint32_t count, uint32_t k) const { return count > opt_.leafSize || (k >= 2 && count >= 2); }
-
-    // Reorders the positions [lo, hi) into k consecutive parts (their sizes pushed on s.sizes),
-    // each a compact patch connected through shared edges where the mesh allows: recursive
-    // graph-growing bisection. The first part of a bisection is a prefix of the breadth-first
-    // order from a pseudo-peripheral triangle (a prefix of a breadth-first order is connected),
-    // sized in proportion to its share of the k parts; the second part is the rest, whose stray
-    // pieces (cut off from its largest piece, so bordered by the first part) move to the first
-    // part. Sizes are therefore near-equal, not exact.
-    // `hint`: a position on the range's periphery, when the caller knows one (kNone otherwise).
-    // `searched`: the range's order is a breadth-first order of the whole range from lo (pushed
-    // with its size when the range is a part).
-    // `r`: the row array holding the range's rows (rows_[r]); the halves' rows go to the other.
-    void partition(Scratch& s, uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint, bool searched, uint8_t r) {
-        const uint32_t n = hi - lo;
-        if (k < 2 || n < 2) {
-            s.sizes.push_back({n, searched, r});
-            return;
+    // One bisection of a set of positions (the range [lo, hi) or, with `list`, the positions
+    // list[0, n) inside it) into a first part of `target` positions or a few more and the rest:
+    // writes the set's new order to s.queue[0, n) and returns the first part's size f. A set
+    // given by a list is searched among labels the range's other positions hold (none kOpen, none
+    // `first`): its rows reach the whole range. `first`: the label of the first part's positions
+    // while the rest is searched.
+    struct Bisection {
+        uint32_t f;
+        bool firstSearched, secondSearched;
+    };
+    Bisection bisect(Scratch& s, const uint32_t* rows, uint32_t* pieces, uint32_t lo, uint32_t hi, const uint32_t* list,
+                     uint32_t n, uint32_t target, uint32_t hint, uint32_t first) {
+        auto position = [&](uint32_t j) { return list ? list[j] : lo + j; };
+        auto labelOpen = [&] {
+            if (!list) {
+                // (At the root this is also the first write of mark_: the threads share its page faults.)
+                blocks(lo, hi, [&](uint32_t b, uint32_t e) { std::fill(mark_.begin() + b, mark_.begin() + e, kOpen); });
+                return;
+            }
+            for (uint32_t j = 0; j < n; ++j) mark_[list[j]] = kOpen;
+        };
+        labelOpen();
+        uint32_t seed = hint;
+        if (seed == kNone) {
+            // The position farthest in hops from the set's first one (ties: the last reached).
+            uint32_t* queue = s.queue;
+            queue[0] = position(0);
+            mark_[queue[0]] = kVisited;
+            seed = queue[grow(rows, queue, 0, 1, lo, hi) - 1];
+            labelOpen();
         }
-        const uint32_t* rows = rows_[r].data();
-        uint32_t* other = rows_[1 - r].data();
-        const uint32_t half = k / 2;
-        const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
-
-        // (At the root this is also the first write of mark_: the threads share its page faults.)
-        blocks(lo, hi, [&](uint32_t b, uint32_t e) { std::fill(mark_.begin() + b, mark_.begin() + e, kOpen); });
-        const uint32_t seed = hint != kNone ? hint : farthest(s, rows, lo, hi);
         uint32_t* bfs = s.queue;
-        uint32_t* pieces = other + 3 * size_t(lo);
         uint32_t size = 0, firstComponent = 0, pieceEnd = 0;
         // Labels bfs[0, size) as the first part (the first `target`) and the rest kOpen, then
-        // finds the pieces of the rest, one after another in the other row array's slots of the
-        // range (free until the halves' rows are written there), started in the order of bfs.
+        // finds the pieces of the rest, one after another in `pieces`, started in the order of bfs.
         auto findPieces = [&] {
-            for (uint32_t i = 0; i < size; ++i) mark_[bfs[i]] = i < target ? kFirst : kOpen;
+            for (uint32_t i = 0; i < size; ++i) mark_[bfs[i]] = i < target ? first : kOpen;
             pieceEnd = 0;
             s.pieceStart.clear();
             for (uint32_t i = target; i < size; ++i) {
@@ -435,18 +499,18 @@ private:
             whole = pieceEnd != n - target;
         }
         if (whole) {
-            // The whole search over the range: when a component is exhausted, go on from the
-            // first unvisited position.
-            blocks(lo, hi, [&](uint32_t b, uint32_t e) { std::fill(mark_.begin() + b, mark_.begin() + e, kOpen); });
+            // The whole search over the set: when a component is exhausted, go on from the
+            // first unvisited position (in the set's order).
+            labelOpen();
             size = 0, firstComponent = 0;
-            uint32_t scan = lo, start = seed;
+            uint32_t scan = 0, start = seed;
             while (size < n) {
                 mark_[start] = kVisited;
                 bfs[size++] = start;
                 size = grow(rows, bfs, size - 1, size, lo, hi);
                 if (firstComponent == 0) firstComponent = size;
-                while (scan < hi && mark_[scan] != kOpen) ++scan;
-                if (scan < hi) start = scan;
+                while (scan < n && mark_[position(scan)] != kOpen) ++scan;
+                if (scan < n) start = position(scan);
             }
             findPieces();
         }
@@ -463,7 +527,7 @@ private:
             if (p == largest) continue;  // stays in the second part whatever it touches
             bool touchesFirst = false;
             for (uint32_t i = s.pieceStart[p]; i < s.pieceStart[p + 1] && !touchesFirst; ++i)
-                forNeighbours(rows, pieces[i], lo, hi, [&](uint32_t u) { touchesFirst |= mark_[u] == kFirst; });
+                forNeighbours(rows, pieces[i], lo, hi, [&](uint32_t u) { touchesFirst |= mark_[u] == first; });
             if (!touchesFirst) continue;
             s.moved[p] = 1;
             --kept;
@@ -471,6 +535,45 @@ private:
         }
         for (size_t p = 0, e = f; p < pieceCount; ++p)
             if (!s.moved[p]) e = std::copy(pieces + s.pieceStart[p], pieces + s.pieceStart[p + 1], bfs + e) - bfs;
+
+        // Which parts are breadth-first orders of themselves from their first position, for the
+        // nodes they may become (split() then needs no search for a peripheral start): the first
+        // part when it is a prefix of the seed's search alone (the searches restricted to a prefix
+        // of a breadth-first order find the prefix in the same order: each triangle of it is
+        // reached from an earlier one), the second when it is one piece (its own search).
+        return {f, target <= firstComponent && f == target, kept == 1};
+    }
+
+    // Whether a part of a bisection will be bisected again, or become a node that is split: only
+    // then does it need rows.
+    bool needsRows(uint32_t count, uint32_t k) const { return count > opt_.leafSize || (k >= 2 && count >= 2); }
+
+    // Reorders the positions [lo, hi) into k consecutive parts (their sizes pushed on s.sizes),
+    // each a compact patch connected through shared edges where the mesh allows: recursive
+    // graph-growing bisection. The first part of a bisection is a prefix of the breadth-first
+    // order from a pseudo-peripheral triangle (a prefix of a breadth-first order is connected),
+    // sized in proportion to its share of the k parts; the second part is the rest, whose stray
+    // pieces (cut off from its largest piece, so bordered by the first part) move to the first
+    // part. Sizes are therefore near-equal, not exact.
+    // `hint`: a position on the range's periphery, when the caller knows one (kNone otherwise).
+    // `searched`: the range's order is a breadth-first order of the whole range from lo (pushed
+    // with its size when the range is a part).
+    // `r`: the row array holding the range's rows (rows_[r]); the halves' rows go to the other.
+    void partition(Scratch& s, uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint, bool searched, uint8_t r) {
+        const uint32_t n = hi - lo;
+        if (k < 2 || n < 2) {
+            s.sizes.push_back({n, searched, r});
+            return;
+        }
+        const uint32_t* rows = rows_[r].data();
+        uint32_t* other = rows_[1 - r].data();
+        const uint32_t half = k / 2;
+        const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
+        // The pieces go to the other row array's slots of the range, free until the halves' rows
+        // are written there.
+        const auto [f, firstSearched, secondSearched] =
+            bisect(s, rows, other + 3 * size_t(lo), lo, hi, nullptr, n, target, hint, kFirst);
+        uint32_t* bfs = s.queue;
 
         // Apply it. mark_ maps each old position to its new one, and the triangle ids and rows
         // are scattered by it (reading old positions in order, where a gather by new position
@@ -517,13 +620,6 @@ private:
         // Peripheral starts for the halves, for free: the first part is a ball around the seed
         // whose last-reached triangle lies on its rim; the second part's first triangle borders
         // the first part. (The second part is a breadth-first order too, so its rim is its end.)
-        //
-        // Which halves are breadth-first orders of themselves from their first position, for the
-        // nodes they may become (split() then needs no search for a peripheral start): the first
-        // part when it is a prefix of the seed's search alone (the searches restricted to a prefix
-        // of a breadth-first order find the prefix in the same order: each triangle of it is
-        // reached from an earlier one), the second when it is one piece (its own search).
-        const bool firstSearched = target <= firstComponent && f == target, secondSearched = kept == 1;
         // Two large halves that are both bisected again are partitioned in parallel (at the top
         // of the tree there are fewer nodes than threads), each in a slice of the scratch (as
         // split() slices it for children) and with a stack of its own, the second's parts pushed
@@ -555,17 +651,6 @@ private:
         }
         parallelFor(lo, hi, kParallelNode / 4,
                     [&](const tbb::blocked_range<size_t>& r) { body(uint32_t(r.begin()), uint32_t(r.end())); });
-    }
-
-    // The position of [lo, hi) farthest in hops from `from` (ties: the last reached in
-    // breadth-first order). Expects the range labelled kOpen and leaves it so.
-    uint32_t farthest(Scratch& s, const uint32_t* rows, uint32_t from, uint32_t hi) {
-        uint32_t* queue = s.queue;
-        queue[0] = from;
-        mark_[from] = kVisited;
-        const uint32_t size = grow(rows, queue, 0, 1, from, hi);  // from is the range's first position
-        std::fill(mark_.begin() + from, mark_.begin() + hi, kOpen);
-        return queue[size - 1];
     }
 
     static constexpr uint32_t kOpen = kNone - 1, kVisited = kNone - 2, kFirst = kNone - 3;
