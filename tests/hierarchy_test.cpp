@@ -281,9 +281,11 @@ TEST(Hierarchy, BadOptions) {
 }
 
 // Random non-manifold meshes, every option corner: the flat build keeps rows restricted to each
-// range in the original rows' order (by triangle id); a row with more than three neighbours goes
-// through the overflow table, whose positions must follow the triangles as they move; leaf 1 and
-// branching 64 push the bisection to single triangles and to parts smaller than their share.
+// part in the original rows' order (by triangle id), cutting them between a bisection's halves
+// (along the first part's rim in one search, or in full when stray pieces move or the part has
+// several components); a row with more than three neighbours goes through the overflow table,
+// cut as the slots are; leaf 1 and branching 64 push the bisection to single triangles and to
+// parts smaller than their share.
 TEST(Hierarchy, ConnectivityMatchesReferenceOnRandomMeshes) {
     expectSameAsReference(randomMesh(1, 3000, 900), {1, 16, 1000}, {2, 3, 4, 64}, "pool 900");
     expectSameAsReference(randomMesh(2, 2000, 60), {1, 16}, {2, 4, 64}, "pool 60 (dense fans)");
@@ -291,8 +293,8 @@ TEST(Hierarchy, ConnectivityMatchesReferenceOnRandomMeshes) {
 }
 
 // Several grids whose triangles are shuffled: components are restarted in the node's order (not
-// by triangle id), and positions differ from ids everywhere, so a build that confused the two,
-// or that restarted components by id, would differ.
+// by triangle id), and a node's order differs from its ids everywhere, so a build that confused
+// the two, or that restarted components by id, would differ.
 TEST(Hierarchy, ConnectivityMatchesReferenceOnShuffledComponents) {
     Mesh m;
     for (int copy = 0; copy < 3; ++copy) {
@@ -304,6 +306,18 @@ TEST(Hierarchy, ConnectivityMatchesReferenceOnShuffledComponents) {
     std::mt19937_64 rng(5);
     std::shuffle(m.triangles.begin(), m.triangles.end(), rng);
     expectSameAsReference(m, {1, 16, 1000}, {2, 3, 4, 64}, "shuffled grids");
+}
+
+// A shuffled grid large enough for the build to renumber it first (more than 4096 triangles, its
+// neighbours' ids far apart): the renumbering by a search from triangle 0 must keep every order
+// by triangle id (rows, restarts), start the root's bisection from that search's last triangle,
+// and map the positions back to triangles at the end. Traps: another seed, a list left in
+// positions, an unshuffled mesh that is renumbered anyway (harmless here, only slower).
+TEST(Hierarchy, ConnectivityMatchesReferenceOnRenumberedMesh) {
+    Mesh m = grid(100);  // 20,000 triangles
+    std::mt19937_64 rng(6);
+    std::shuffle(m.triangles.begin(), m.triangles.end(), rng);
+    expectSameAsReference(m, {1, 16}, {2, 4}, "shuffled grid 100");
 }
 
 // A fan of 40 triangles on one edge inside a grid, plus duplicated faces: the fan's rows hold 39+
@@ -329,9 +343,11 @@ TEST(Hierarchy, ConnectivityMatchesReferenceOnBundledMeshes) {
 
 // Nodes of 2^16 triangles and more split their children in parallel, each subtree in a list of its
 // own, appended afterwards. Traps: subtrees sharing scratch (a race TSan sees, or wrong orders),
-// appended with the wrong index shift or out of child order, or an overflow row (non-manifold
-// edge) followed to a position of another subtree. The result must equal the one-thread
-// reference and be the same under one worker thread as under all.
+// appended with the wrong index shift or out of child order, or a row (slots or overflow, on a
+// non-manifold edge) still reaching into another subtree: each cut edge must be cut on both
+// sides, or a subtree's search reads and writes back the labels of a subtree running beside it
+// (a race TSan sees; one thread, splitting the subtrees in order, cannot tell). The result must
+// equal the one-thread reference and be the same under one worker thread as under all.
 TEST(Hierarchy, ParallelSubtreesMatchReference) {
     const Mesh pool = randomMesh(4, 100000, 30000);
     const Mesh sheet = grid(200);  // 80k triangles, one component

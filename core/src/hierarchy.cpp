@@ -51,40 +51,35 @@ uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
 
 // Builds the hierarchy over flat arrays sized once per build (no allocation per node).
 //
-// Connectivity works in position space: a node, and every part of its recursive bisection, is a
-// range [lo, hi) of positions in out_.order, and its face adjacency is kept restricted to that
-// range: the row of position p holds the positions of p's neighbours inside the range, in
-// increasing order of their triangle ids (the order of the searches this follows). After each
-// bisection the rows of both halves are rebuilt, restricted to themselves, into the other of two
-// row arrays (so no copy back; a range's rows are in one, its halves' in the other). So a search
-// needs no membership test, and a patch's triangles sit next to each other in memory.
-// That holds down to nodes of kInPlaceNode triangles; a smaller node's subtree is split in place
-// (Builder::InPlace): its parts are lists of positions, told apart by their labels.
+// Connectivity works on a list of the triangles, out_.order: a node, and every part of its
+// recursive bisection, is a segment of it, and a bisection reorders its segment (the hierarchy's
+// order is then the list). A triangle's face adjacency (its row) is kept restricted to the
+// smallest part it lies in: after each bisection, the rows on the cut between the two halves
+// lose their neighbours across it. So a search needs no membership test, and parts split in
+// parallel never read each other's triangles. Neither triangles nor rows move: only the cut
+// rows are written, and the rest of a bisection's cost is its searches.
 //
-// A row is three slots (a triangle has three edges), unused ones holding the position itself: a
+// A row is three slots (a triangle has three edges), unused ones holding the triangle itself: a
 // triangle is labelled kVisited before its row is read, so it never passes for an open or first
-// neighbour; searches run without branches on row lengths, and a rebuild is a scatter by new
-// position. (One shared sentinel position would chain every search step through its label.)
-// A triangle with more than three neighbours (on a non-manifold edge) has slot 0 = kEscape and
-// its neighbours' triangle ids in overflow_ (slots 1, 2: offset and count), found through posOf_
-// (triangle id -> position) and tested against the range.
+// neighbour; searches run without branches on row lengths. (One shared sentinel would chain
+// every search step through its label.) A triangle with more than three neighbours (on a
+// non-manifold edge) has slot 0 = kEscape and its neighbours in overflow_ (slots 1, 2: offset
+// and count), restricted as the slots are.
 // The build's arrays: written before they are read, and mapped with pages of their own, so that
 // the scratch a parallel subtree frees goes back to the system (cullide/unwritten.h).
 template <typename T>
 using Pages = UnwrittenVector<T, true>;
 
-// A part of a node's partition: its size, whether its order is a breadth-first order of the
-// whole part from its first position (see partition()), and which of the two row arrays
-// (Builder::rows_) holds its rows.
+// A part of a node's partition: its size, and whether its order is a breadth-first order of the
+// whole part from its first triangle (see partition()).
 struct Part {
     uint32_t size;
     bool searched;
-    uint8_t rows;
 };
 
-// What one thread's splits write besides the shared arrays, indexed from the start of the range
-// being split: queue (breadth-first order, then the new triangle ids), and the small stacks.
-// (The pieces of a bisection and its rebuilt rows go to the row array its range does not use.)
+// What one thread's splits write besides the shared arrays, indexed from the start of the segment
+// being split: queue (a bisection's breadth-first order, then the segment's new order), and the
+// small stacks. (A bisection's pieces go to Builder::pieces_ at the segment's offset.)
 //
 // The queue is a view: the root's is the build's own (Builder::queue_), and a parallel subtree's
 // is a slice of its parent's, not an array of its own. Fresh pages cost a page fault each on
@@ -92,7 +87,7 @@ struct Part {
 // (4 ms per MiB): the subtrees' own scratch (40 MB in 4 KiB-page arrays for 1M triangles) was
 // about a fifth of a 1M build. The memory is the same: a parent's scratch was freed before its
 // children allocated theirs, as large together.
-// For a range of m positions, queue holds m + slack entries (a search writes one past its last
+// For a segment of m triangles, queue holds m + slack entries (a search writes one past its last
 // entry, so slack >= 1, and siblings' slices must not overlap there).
 struct Scratch {
     uint32_t* queue = nullptr;
@@ -102,7 +97,7 @@ struct Scratch {
     std::vector<uint8_t> moved;
     Pages<uint32_t> ownQueue;  // only where the parent's slack ran out
 
-    void allocate(uint32_t n) {  // a queue of its own, for ranges of up to n positions
+    void allocate(uint32_t n) {  // a queue of its own, for segments of up to n triangles
         ownQueue.resize(size_t(n) + 1);
         queue = ownQueue.data(), slack = 1;
     }
@@ -111,9 +106,6 @@ struct Scratch {
 // Nodes of at least this many triangles split their children in parallel (a 1M-triangle build
 // has 16 such nodes at leaf size 16, branching 4; smaller subtrees are not worth a task).
 constexpr uint32_t kParallelNode = 1 << 16;
-// Nodes of fewer triangles are split in place (Builder::InPlace).
-constexpr uint32_t kInPlaceNode = 1 << 16;
-static_assert(kInPlaceNode <= kParallelNode, "a subtree split in place runs on one thread");
 
 class Builder {
 public:
@@ -133,7 +125,7 @@ public:
         out_.nodes.push_back({0, n, 0, 0, 0});
         if (n <= opt_.leafSize) return;  // a leaf root: no adjacency to build
         if (opt_.kind == HierarchyKind::Connectivity) {
-            CULLIDE_CHECK(n < kFirst - kInPlaceNode, "triangle count leaves room for the labels");
+            CULLIDE_CHECK(n < kFirst, "triangle count leaves room for the labels");
             // Slack for a slice per parallel subtree: each level of parallel subtrees divides it
             // by the branching (a 1M build has two such levels); where it runs out, a subtree
             // allocates its own scratch.
@@ -143,7 +135,14 @@ public:
             mark_.resize(n);
             root_.queue = queue_.data(), root_.slack = slack;
         }
-        split(out_.nodes, 0, root_, {n, false, 0});
+        const bool compacted = opt_.kind == HierarchyKind::Connectivity && scattered() && (compact(), true);
+        split(out_.nodes, 0, root_, {n, false});
+        if (!compacted) return;
+        // The list holds positions: their triangles.
+        const uint32_t* triangleAt = pieces_.data() + n;
+        blocks(0, n, [&](uint32_t b, uint32_t e) {
+            for (uint32_t j = b; j < e; ++j) out_.order[j] = triangleAt[out_.order[j]];
+        });
     }
 
 private:
@@ -158,12 +157,11 @@ private:
     // Face adjacency through shared edges (by vertex index), neighbours in increasing triangle
     // order. Triangles on a non-manifold edge are all adjacent to each other; degenerate edges
     // (a == b) connect nothing. Built from the vertex -> triangle incidence (linear time): the
-    // triangles sharing edge (a, b) are among those incident to a. Positions are triangle ids at
-    // the root.
+    // triangles sharing edge (a, b) are among those incident to a.
     //
-    // The incidence array becomes the second row array (3n entries), and the vertex starts
-    // live in the root's queue where they fit: both are then written for the first time here, and
-    // their page faults are paid once.
+    // The vertex starts live in the root's queue where they fit, and the incidence array becomes
+    // the pieces' scratch: both are then written for the first time here, and their page faults
+    // are paid once.
     void buildAdjacency() {
         const uint32_t n = uint32_t(mesh_.triangles.size());
         const size_t nv = mesh_.positions.size();
@@ -185,7 +183,7 @@ private:
         // The rows, in parallel blocks: each row depends on the incidence only. A row longer than
         // three goes to overflow_, which is appended in triangle order afterwards (non-manifold
         // edges are rare), so the layout does not depend on the threads.
-        Pages<uint32_t>& slots = rows_[0];
+        Pages<uint32_t>& slots = rows_;
         slots.resize(3 * size_t(n));
         overflow_.clear();
         // The arrays as local pointers, and the triangle by value: push_back's out-of-line growth
@@ -232,62 +230,68 @@ private:
                 slot[0] = kEscape, slot[1] = uint32_t(overflow_.size()), slot[2] = uint32_t(row.size());
                 overflow_.insert(overflow_.end(), row.begin(), row.end());
             }
-        if (!overflow_.empty()) {
-            posOf_.resize(n);
-            for (uint32_t t = 0; t < n; ++t) posOf_[t] = t;
-        }
-        // A bisection writes its halves' rows to the other row array (no copy back): the incidence
-        // array (3n entries, as many as the slots, already written once) serves as that.
-        rows_[1] = std::move(incident);
+        // The incidence array (3n entries, already written once) holds the bisections' pieces.
+        pieces_ = std::move(incident);
     }
 
-    // A subtree of fewer than kInPlaceNode triangles is split in place: its bisections reorder a
-    // list of its positions (ord) and leave the positions, their rows and their triangle ids
-    // where they are; the triangle ids move once, when the whole subtree is split. A search keeps
-    // to its part by labels alone: the rows reach the whole subtree, where every position outside
-    // the part is labelled neither kOpen nor the part's first-part label (each bisection has its
-    // own, counting down from kFirst). Above that size each bisection moves its positions and
-    // rebuilds its halves' rows (partition()), which keeps a part compact in memory but costs two
-    // passes over it; below, the passes cost more than the compactness saved. The 1M-triangle
-    // bunny on one thread, in place below 2^10, 2^12, 2^14, 2^16 triangles: 470-480, 466-470,
-    // 454, 440-446 ms, against 514-517 ms moving at every bisection (the same hierarchy).
-    struct InPlace {
-        uint32_t lo, hi;  // the subtree's positions
-        const uint32_t* rows;  // their rows, restricted to [lo, hi)
-        uint32_t* pieces;  // the pieces of the part at ord + j go to pieces + j
-        uint32_t* ord;  // the subtree's order: position ord[j] ends at lo + j
-        uint32_t first;  // the next bisection's first-part label
-    };
-
-    void splitInPlace(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s, Part part) {
-        const uint32_t lo = nodes[i].first, n = nodes[i].count;
-        // The other row array's slots of the range are free: the subtree writes no rows.
-        uint32_t* other = rows_[1 - part.rows].data() + 3 * size_t(lo);
-        InPlace in{lo, lo + n, rows_[part.rows].data(), other, other + n, kFirst};
-        for (uint32_t j = 0; j < n; ++j) in.ord[j] = lo + j;
-        split(nodes, i, s, part, &in);
-        // The triangle ids in the subtree's order (the queue is free by now).
-        for (uint32_t j = 0; j < n; ++j) s.queue[j] = out_.order[in.ord[j]];
-        std::copy(s.queue, s.queue + n, out_.order.begin() + lo);
-        if (!posOf_.empty())
-            for (uint32_t p = lo; p < lo + n; ++p)  // read concurrently by forNeighbours of other ranges
-                std::atomic_ref<uint32_t>(posOf_[out_.order[p]]).store(p, std::memory_order_relaxed);
+    // Neither triangles nor rows move during the bisections, so the mesh's own order decides
+    // whether a part's rows lie near each other in memory. Most meshes keep neighbours close (the
+    // subdivided bunny: 96% of its sampled neighbours within 4096 ids at 1M and 270k triangles,
+    // 99% at 5k); a mesh whose triangles were shuffled does not (1%), and the 1M bunny shuffled
+    // took 1.3 s to build, against 0.84 s when parts were still moved into place. Such a mesh,
+    // where fewer than half of the sampled neighbours lie within 4096 ids, is renumbered first
+    // (compact()).
+    bool scattered() const {
+        const uint32_t n = uint32_t(mark_.size()), step = std::max<uint32_t>(1, n / 4096);
+        uint64_t near = 0, all = 0;
+        for (uint32_t t = 0; t < n; t += step)
+            forNeighbours(t, [&](uint32_t u) {
+                if (u == t) return;
+                ++all;
+                near += (u > t ? u - t : t - u) < 4096;
+            });
+        return 2 * near < all;
     }
 
-    // partition() in a subtree split in place: reorders in.ord[at, at + n) into k parts.
-    void partitionInPlace(Scratch& s, InPlace& in, uint32_t at, uint32_t n, uint32_t k, uint32_t hint, bool searched) {
-        if (k < 2 || n < 2) {
-            s.sizes.push_back({n, searched, 0});
-            return;
-        }
-        const uint32_t half = k / 2;
-        const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
-        uint32_t* list = in.ord + at;
-        const auto [f, firstSearched, secondSearched] =
-            bisect(s, in.rows, in.pieces + at, in.lo, in.hi, list, n, target, hint, in.first--);
-        std::copy(s.queue, s.queue + n, list);
-        partitionInPlace(s, in, at, f, half, list[f - 1], firstSearched);
-        partitionInPlace(s, in, at + f, n - f, k - half, list[n - 1], secondSearched);
+    // Numbers the triangles for the build by a breadth-first order from triangle 0 (the other
+    // components' triangles after it, by id): rows_ and overflow_ then hold positions, and the
+    // list (out_.order) the positions of triangles 0, 1, ... until the build ends. The search is
+    // the one the root's bisection starts with (its farthest triangle is the root's seed), so
+    // only the renumbering is added. Ties and orders are by triangle id throughout (the rows keep
+    // their order), so the hierarchy is the same.
+    void compact() {
+        const uint32_t n = uint32_t(mark_.size());
+        uint32_t* mark = mark_.data();
+        blocks(0, n, [&](uint32_t b, uint32_t e) { std::fill(mark + b, mark + e, kOpen); });
+        uint32_t* order = queue_.data();  // position -> triangle
+        order[0] = 0;
+        mark[0] = kVisited;
+        uint32_t size = grow(order, 0, 1);
+        rootSeed_ = size - 1;
+        for (uint32_t t = 0; t < n && size < n; ++t)
+            if (mark[t] == kOpen) order[size++] = t;
+        blocks(0, n, [&](uint32_t b, uint32_t e) {
+            for (uint32_t j = b; j < e; ++j) mark[order[j]] = j;  // triangle -> position
+        });
+        // The rows, renumbered, into the incidence array; the old rows array becomes the scratch
+        // (pieces at [0, n), the position -> triangle map at [n, 2n)).
+        const uint32_t* rows = rows_.data();
+        uint32_t* out = pieces_.data();
+        blocks(0, n, [&](uint32_t b, uint32_t e) {
+            for (uint32_t t = b; t < e; ++t) {
+                const uint32_t* slot = rows + 3 * size_t(t);
+                uint32_t* to = out + 3 * size_t(mark[t]);
+                if (slot[0] == kEscape) {
+                    std::copy(slot, slot + 3, to);
+                    continue;
+                }
+                to[0] = mark[slot[0]], to[1] = mark[slot[1]], to[2] = mark[slot[2]];
+            }
+        });
+        for (uint32_t& q : overflow_) q = mark[q];
+        std::swap(rows_, pieces_);
+        std::copy(order, order + n, pieces_.data() + n);
+        blocks(0, n, [&](uint32_t b, uint32_t e) { std::copy(mark + b, mark + e, out_.order.data() + b); });
     }
 
     // Splits nodes[i] and its descendants, appending them to `nodes` depth first: a node's
@@ -296,36 +300,25 @@ private:
     // A large node's children are split in parallel, each subtree in a list of its own (its root
     // at 0, its descendants after it) with scratch of its own, then appended in child order with
     // their indices shifted: the same nodes, in the same order, as one thread would make. The
-    // subtrees' positions are disjoint ranges, so they share the arrays indexed by position or by
-    // triangle id (each writes only its own part) and read the overflow rows only.
+    // subtrees' segments are disjoint and their rows restricted to them, so they share the arrays
+    // (each writes only its own triangles' entries).
     //
     // `part`: the node as a part of its parent's partition. part.searched: the node's order is a
-    // breadth-first order of the whole node from its first position, so that search's farthest
-    // position is known: the last one. part.rows: the row array holding the node's rows.
-    //
-    // `in`: the subtree this node lies in, when that is split in place (see InPlace).
-    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s, Part part, InPlace* in = nullptr) {
+    // breadth-first order of the whole node from its first triangle, so that search's farthest
+    // triangle is known: the last one.
+    void split(std::vector<HierarchyNode>& nodes, uint32_t i, Scratch& s, Part part) {
         const HierarchyNode node = nodes[i];
         if (node.count <= opt_.leafSize) return;
-        if (opt_.kind == HierarchyKind::Connectivity && !in && node.count < kInPlaceNode) {
-            splitInPlace(nodes, i, s, part);
-            return;
-        }
         const uint32_t k = std::min<uint32_t>(opt_.branching, node.count);
         // s.sizes is a stack: this node's children stay on it while their subtrees push theirs.
         const size_t base = s.sizes.size();
-        if (in) {
-            const uint32_t at = node.first - in->lo;
-            partitionInPlace(s, *in, at, node.count, k, part.searched ? in->ord[at + node.count - 1] : kNone,
-                             part.searched);
-        } else if (opt_.kind == HierarchyKind::Connectivity) {
-            const uint32_t hi = node.first + node.count;
-            partition(s, node.first, hi, k, part.searched ? hi - 1 : kNone, part.searched, part.rows);
+        if (opt_.kind == HierarchyKind::Connectivity) {
+            const uint32_t last = out_.order[node.first + node.count - 1];
+            const bool root = node.count == mark_.size();
+            partition(s, node.first, node.count, k, part.searched ? last : root ? rootSeed_ : kNone, part.searched);
         } else {
-            for (uint32_t c = 0; c < k; ++c)
-                s.sizes.push_back({node.count / k + (c < node.count % k ? 1 : 0), false, 0});
+            for (uint32_t c = 0; c < k; ++c) s.sizes.push_back({node.count / k + (c < node.count % k ? 1 : 0), false});
         }
-
         const uint32_t firstChild = uint32_t(nodes.size());
         const uint32_t childCount = uint32_t(s.sizes.size() - base);
         nodes[i].firstChild = firstChild;
@@ -338,7 +331,7 @@ private:
             first += size;
         }
         if (node.count < kParallelNode) {
-            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s, s.sizes[base + c], in);
+            for (uint32_t c = 0; c < childCount; ++c) split(nodes, firstChild + c, s, s.sizes[base + c]);
             s.sizes.resize(base);
             return;
         }
@@ -374,38 +367,30 @@ private:
         }
     }
 
-    // Calls f(q) for the neighbours q of position p in the range [lo, hi), in increasing order
-    // of triangle id, and for p itself in unused slots (p is labelled kVisited by then). `rows`:
-    // the row array holding the range's rows.
+    // Calls f(q) for the neighbours q of triangle p in its part, in increasing order, and for p
+    // itself in unused slots (p is labelled kVisited by then).
     template <class F>
-    void forNeighbours(const uint32_t* rows, uint32_t p, uint32_t lo, uint32_t hi, F&& f) const {
-        const uint32_t* slot = rows + 3 * size_t(p);
+    void forNeighbours(uint32_t p, F&& f) const {
+        const uint32_t* slot = rows_.data() + 3 * size_t(p);
         if (slot[0] != kEscape) {
             f(slot[0]), f(slot[1]), f(slot[2]);
             return;
         }
-        for (uint32_t i = slot[1]; i < slot[1] + slot[2]; ++i) {
-            // Relaxed: the neighbour may lie in a range another thread is renumbering (parallel
-            // halves or subtrees); its old and new positions are both outside [lo, hi), so either
-            // value gives the same test, but the read must not be a data race.
-            const uint32_t q =
-                std::atomic_ref<uint32_t>(const_cast<uint32_t&>(posOf_[overflow_[i]])).load(std::memory_order_relaxed);
-            if (q >= lo && q < hi) f(q);
-        }
+        for (uint32_t i = slot[1]; i < slot[1] + slot[2]; ++i) f(overflow_[i]);
     }
 
-    // Breadth-first search over kOpen positions of [lo, hi), labelling them kVisited: the queue
-    // holds [head, size); returns its new end. With `stop`, it expands only the positions before
-    // queue index `stop` (the queue then holds all their neighbours). Branch-free: whether a
-    // neighbour is open is a coin toss the branch predictor loses, so each neighbour is written at
-    // the queue's end and kept only if it was open.
+    // Breadth-first search over kOpen triangles, labelling them kVisited: the queue holds [head,
+    // size); returns its new end. With `stop`, it expands only the triangles before queue index
+    // `stop` (the queue then holds all their neighbours). Branch-free: whether a neighbour is open
+    // is a coin toss the branch predictor loses, so each neighbour is written at the queue's end
+    // and kept only if it was open.
     // The row of the triangle 16 places ahead in the queue is prefetched: near the top of the
     // tree the rows lie beyond the caches, and the search would wait on each (5-10% of a 1M build).
     // A three-slot row reads its three labels before writing any: its entries are distinct but
-    // for repeats of the position itself (kVisited, left as is), so no write changes a label read
+    // for repeats of the triangle itself (kVisited, left as is), so no write changes a label read
     // after it, and the loads no longer wait on the stores (the compiler cannot know that).
-    uint32_t grow(const uint32_t* rows, uint32_t* queue, uint32_t head, uint32_t size, uint32_t lo, uint32_t hi,
-                  uint32_t stop = kNone) {
+    uint32_t grow(uint32_t* queue, uint32_t head, uint32_t size, uint32_t stop = kNone) {
+        const uint32_t* rows = rows_.data();
         uint32_t* mark = mark_.data();
         for (; head < size && head < stop; ++head) {
             if (head + 16 < size) __builtin_prefetch(rows + 3 * size_t(queue[head + 16]));
@@ -424,7 +409,7 @@ private:
                 mark[c] = lc == kOpen ? kVisited : lc;
                 continue;
             }
-            forNeighbours(rows, queue[head], lo, hi, [&](uint32_t u) {
+            forNeighbours(queue[head], [&](uint32_t u) {
                 const uint32_t label = mark[u];
                 queue[size] = u;
                 size += label == kOpen;
@@ -434,35 +419,52 @@ private:
         return size;
     }
 
-    // One bisection of a set of positions (the range [lo, hi) or, with `list`, the positions
-    // list[0, n) inside it) into a first part of `target` positions or a few more and the rest:
-    // writes the set's new order to s.queue[0, n) and returns the first part's size f. A set
-    // given by a list is searched among labels the range's other positions hold (none kOpen, none
-    // `first`): its rows reach the whole range. `first`: the label of the first part's positions
-    // while the rest is searched.
-    struct Bisection {
-        uint32_t f;
-        bool firstSearched, secondSearched;
-    };
-    Bisection bisect(Scratch& s, const uint32_t* rows, uint32_t* pieces, uint32_t lo, uint32_t hi, const uint32_t* list,
-                     uint32_t n, uint32_t target, uint32_t hint, uint32_t first) {
-        auto position = [&](uint32_t j) { return list ? list[j] : lo + j; };
+    // Replaces neighbour q in p's row by p itself (p's side of a cut edge).
+    void cut(uint32_t p, uint32_t q) {
+        uint32_t* slot = rows_.data() + 3 * size_t(p);
+        if (slot[0] != kEscape) {
+            for (int k = 0; k < 3; ++k) slot[k] = slot[k] == q ? p : slot[k];
+            return;
+        }
+        for (uint32_t i = slot[1]; i < slot[1] + slot[2]; ++i) overflow_[i] = overflow_[i] == q ? p : overflow_[i];
+    }
+
+    // Whether a part of a bisection will be bisected again, or become a node that is split: only
+    // then does it need its rows.
+    bool needsRows(uint32_t count, uint32_t k) const { return count > opt_.leafSize || (k >= 2 && count >= 2); }
+
+    // Reorders the segment out_.order[at, at + n) into k consecutive parts (their sizes pushed on
+    // s.sizes), each a compact patch connected through shared edges where the mesh allows:
+    // recursive graph-growing bisection. The first part of a bisection is a prefix of the
+    // breadth-first order from a pseudo-peripheral triangle (a prefix of a breadth-first order is
+    // connected), sized in proportion to its share of the k parts; the second part is the rest,
+    // whose stray pieces (cut off from its largest piece, so bordered by the first part) move to
+    // the first part. Sizes are therefore near-equal, not exact.
+    // `hint`: a triangle on the segment's periphery, when the caller knows one (kNone otherwise).
+    // `searched`: the segment's order is a breadth-first order of the whole segment from its first
+    // triangle (pushed with its size when the segment is a part).
+    void partition(Scratch& s, uint32_t at, uint32_t n, uint32_t k, uint32_t hint, bool searched) {
+        if (k < 2 || n < 2) {
+            s.sizes.push_back({n, searched});
+            return;
+        }
+        const uint32_t half = k / 2;
+        const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
+        uint32_t* const list = out_.order.data() + at;
+        uint32_t* const pieces = pieces_.data() + at;
         auto labelOpen = [&] {
-            if (!list) {
-                // (At the root this is also the first write of mark_: the threads share its page faults.)
-                blocks(lo, hi, [&](uint32_t b, uint32_t e) { std::fill(mark_.begin() + b, mark_.begin() + e, kOpen); });
-                return;
-            }
-            for (uint32_t j = 0; j < n; ++j) mark_[list[j]] = kOpen;
+            blocks(0, n, [&](uint32_t b, uint32_t e) {
+                for (uint32_t j = b; j < e; ++j) mark_[list[j]] = kOpen;
+            });
         };
         labelOpen();
         uint32_t seed = hint;
         if (seed == kNone) {
-            // The position farthest in hops from the set's first one (ties: the last reached).
+            // The triangle farthest in hops from the segment's first one (ties: the last reached).
             uint32_t* queue = s.queue;
-            queue[0] = position(0);
+            queue[0] = list[0];
             mark_[queue[0]] = kVisited;
-            seed = queue[grow(rows, queue, 0, 1, lo, hi) - 1];
+            seed = queue[grow(queue, 0, 1) - 1];
             labelOpen();
         }
         uint32_t* bfs = s.queue;
@@ -470,7 +472,7 @@ private:
         // Labels bfs[0, size) as the first part (the first `target`) and the rest kOpen, then
         // finds the pieces of the rest, one after another in `pieces`, started in the order of bfs.
         auto findPieces = [&] {
-            for (uint32_t i = 0; i < size; ++i) mark_[bfs[i]] = i < target ? first : kOpen;
+            for (uint32_t i = 0; i < size; ++i) mark_[bfs[i]] = i < target ? kFirst : kOpen;
             pieceEnd = 0;
             s.pieceStart.clear();
             for (uint32_t i = target; i < size; ++i) {
@@ -478,20 +480,20 @@ private:
                 s.pieceStart.push_back(pieceEnd);
                 mark_[bfs[i]] = kVisited;
                 pieces[pieceEnd++] = bfs[i];
-                pieceEnd = grow(rows, pieces, pieceEnd - 1, pieceEnd, lo, hi);
+                pieceEnd = grow(pieces, pieceEnd - 1, pieceEnd);
             }
             s.pieceStart.push_back(pieceEnd);
         };
         // The search from the seed stops once the first part is expanded: the queue then holds
         // every neighbour of the first part, in the order the whole search would put them. Each
         // piece of the rest inside the seed's component is reached from the first part, so its
-        // first position in the whole search is among those: the pieces, and their order, are the
+        // first triangle in the whole search is among those: the pieces, and their order, are the
         // whole search's. When they do not cover the rest (other components; rare: the halves
         // of a connected mesh are connected), the whole search runs after all. (This halves the
         // search from the seed: a third of a bisection's searches.)
         mark_[seed] = kVisited;
         bfs[size++] = seed;
-        size = grow(rows, bfs, 0, size, lo, hi, target);
+        size = grow(bfs, 0, size, target);
         bool whole = size <= target;  // the seed's component ends within the first part
         if (!whole) {
             firstComponent = size;  // at most its size; only target <= firstComponent is read
@@ -499,18 +501,18 @@ private:
             whole = pieceEnd != n - target;
         }
         if (whole) {
-            // The whole search over the set: when a component is exhausted, go on from the
-            // first unvisited position (in the set's order).
+            // The whole search over the segment: when a component is exhausted, go on from the
+            // first unvisited triangle in the segment's order.
             labelOpen();
             size = 0, firstComponent = 0;
             uint32_t scan = 0, start = seed;
             while (size < n) {
                 mark_[start] = kVisited;
                 bfs[size++] = start;
-                size = grow(rows, bfs, size - 1, size, lo, hi);
+                size = grow(bfs, size - 1, size);
                 if (firstComponent == 0) firstComponent = size;
-                while (scan < n && mark_[position(scan)] != kOpen) ++scan;
-                if (scan < n) start = position(scan);
+                while (scan < n && mark_[list[scan]] != kOpen) ++scan;
+                if (scan < n) start = list[scan];
             }
             findPieces();
         }
@@ -520,106 +522,74 @@ private:
         for (size_t p = 1; p < pieceCount; ++p)
             if (pieceSize(p) > pieceSize(largest)) largest = p;
 
-        // The new order, in bfs: the first part (its prefix is in place), then the second.
+        // The stray pieces that touch the first part join it.
         s.moved.assign(pieceCount, 0);
         uint32_t f = target, kept = uint32_t(pieceCount);
         for (size_t p = 0; p < pieceCount; ++p) {
             if (p == largest) continue;  // stays in the second part whatever it touches
             bool touchesFirst = false;
             for (uint32_t i = s.pieceStart[p]; i < s.pieceStart[p + 1] && !touchesFirst; ++i)
-                forNeighbours(rows, pieces[i], lo, hi, [&](uint32_t u) { touchesFirst |= mark_[u] == first; });
+                forNeighbours(pieces[i], [&](uint32_t u) { touchesFirst |= mark_[u] == kFirst; });
             if (!touchesFirst) continue;
             s.moved[p] = 1;
             --kept;
-            f = uint32_t(std::copy(pieces + s.pieceStart[p], pieces + s.pieceStart[p + 1], bfs + f) - bfs);
+            f += pieceSize(p);
         }
+
+        // Cut the rows between the halves, where the halves are bisected again or split. The cut
+        // edges join the seed's search's first `target` triangles (labelled kFirst) to the kept
+        // pieces (the stray pieces that move touch no other piece: pieces are the components of
+        // the rest); a kept piece's triangle on such an edge is a neighbour of the first part,
+        // so it is in bfs[target, size). So only those few rows are cut, once the moved pieces
+        // are labelled kFirst too. After the whole search (several components, rare) bfs holds
+        // every triangle, and every row of the segment keeps only the neighbours labelled as
+        // itself once the halves are labelled (below).
+        const bool rowsNeeded = needsRows(f, half) || needsRows(n - f, k - half);
+        if (rowsNeeded && !whole) {
+            for (size_t p = 0; p < pieceCount; ++p)
+                if (s.moved[p])
+                    for (uint32_t i = s.pieceStart[p]; i < s.pieceStart[p + 1]; ++i) mark_[pieces[i]] = kFirst;
+            for (uint32_t i = target; i < size; ++i) {
+                const uint32_t p = bfs[i];
+                if (mark_[p] == kFirst) continue;  // in a moved piece
+                forNeighbours(p, [&](uint32_t q) {
+                    if (mark_[q] != kFirst) return;
+                    cut(p, q);
+                    cut(q, p);
+                });
+            }
+        }
+
+        // The new order in bfs: the first part (its prefix is in place), then the second.
+        for (size_t p = 0, e = target; p < pieceCount; ++p)
+            if (s.moved[p]) e = std::copy(pieces + s.pieceStart[p], pieces + s.pieceStart[p + 1], bfs + e) - bfs;
         for (size_t p = 0, e = f; p < pieceCount; ++p)
             if (!s.moved[p]) e = std::copy(pieces + s.pieceStart[p], pieces + s.pieceStart[p + 1], bfs + e) - bfs;
-
-        // Which parts are breadth-first orders of themselves from their first position, for the
-        // nodes they may become (split() then needs no search for a peripheral start): the first
-        // part when it is a prefix of the seed's search alone (the searches restricted to a prefix
-        // of a breadth-first order find the prefix in the same order: each triangle of it is
-        // reached from an earlier one), the second when it is one piece (its own search).
-        return {f, target <= firstComponent && f == target, kept == 1};
-    }
-
-    // Whether a part of a bisection will be bisected again, or become a node that is split: only
-    // then does it need rows.
-    bool needsRows(uint32_t count, uint32_t k) const { return count > opt_.leafSize || (k >= 2 && count >= 2); }
-
-    // Reorders the positions [lo, hi) into k consecutive parts (their sizes pushed on s.sizes),
-    // each a compact patch connected through shared edges where the mesh allows: recursive
-    // graph-growing bisection. The first part of a bisection is a prefix of the breadth-first
-    // order from a pseudo-peripheral triangle (a prefix of a breadth-first order is connected),
-    // sized in proportion to its share of the k parts; the second part is the rest, whose stray
-    // pieces (cut off from its largest piece, so bordered by the first part) move to the first
-    // part. Sizes are therefore near-equal, not exact.
-    // `hint`: a position on the range's periphery, when the caller knows one (kNone otherwise).
-    // `searched`: the range's order is a breadth-first order of the whole range from lo (pushed
-    // with its size when the range is a part).
-    // `r`: the row array holding the range's rows (rows_[r]); the halves' rows go to the other.
-    void partition(Scratch& s, uint32_t lo, uint32_t hi, uint32_t k, uint32_t hint, bool searched, uint8_t r) {
-        const uint32_t n = hi - lo;
-        if (k < 2 || n < 2) {
-            s.sizes.push_back({n, searched, r});
-            return;
-        }
-        const uint32_t* rows = rows_[r].data();
-        uint32_t* other = rows_[1 - r].data();
-        const uint32_t half = k / 2;
-        const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
-        // The pieces go to the other row array's slots of the range, free until the halves' rows
-        // are written there.
-        const auto [f, firstSearched, secondSearched] =
-            bisect(s, rows, other + 3 * size_t(lo), lo, hi, nullptr, n, target, hint, kFirst);
-        uint32_t* bfs = s.queue;
-
-        // Apply it. mark_ maps each old position to its new one, and the triangle ids and rows
-        // are scattered by it (reading old positions in order, where a gather by new position
-        // would read them at random). Each position writes entries of its own, so a large range
-        // is applied in parallel blocks.
-        blocks(lo, hi, [&](uint32_t b, uint32_t e) {
-            for (uint32_t j = b; j < e; ++j) mark_[bfs[j - lo]] = j;
-        });
-        blocks(lo, hi, [&](uint32_t b, uint32_t e) {
-            for (uint32_t p = b; p < e; ++p) bfs[mark_[p] - lo] = out_.order[p];  // bfs is read by now
-        });
-        blocks(lo, hi, [&](uint32_t b, uint32_t e) {
-            std::copy(bfs + (b - lo), bfs + (e - lo), out_.order.begin() + b);
-            if (!posOf_.empty())
-                for (uint32_t p = b; p < e; ++p)  // read concurrently by forNeighbours of other ranges
-                    std::atomic_ref<uint32_t>(posOf_[out_.order[p]]).store(p, std::memory_order_relaxed);
-        });
-        if (needsRows(f, half) || needsRows(n - f, k - half)) {
-            // Each half's rows keep the neighbours in that half, in place (the position itself
-            // elsewhere), written to the other row array: the halves read them from there.
-            // Whether a neighbour q lies in np's half [a, a + w) is one unsigned comparison, and
-            // the row is written without a branch on it (which went either way at a half's rim).
-            // The arrays as locals: through the closure GCC reloaded them every position.
-            const uint32_t mid = lo + f;
-            const uint32_t* const mark = mark_.data();
-            blocks(lo, hi, [=](uint32_t begin, uint32_t end) {
-                for (uint32_t p = begin; p < end; ++p) {
-                    const uint32_t np = mark[p];
-                    const uint32_t a = np < mid ? lo : mid, w = np < mid ? mid - lo : hi - mid;
-                    const uint32_t* slot = rows + 3 * size_t(p);
-                    uint32_t* out = other + 3 * size_t(np);
-                    if (slot[0] == kEscape) {
-                        std::copy(slot, slot + 3, out);
-                        continue;
-                    }
-                    const uint32_t q0 = mark[slot[0]], q1 = mark[slot[1]], q2 = mark[slot[2]];
-                    out[0] = q0 - a < w ? q0 : np;
-                    out[1] = q1 - a < w ? q1 : np;
-                    out[2] = q2 - a < w ? q2 : np;
+        if (rowsNeeded && whole) {
+            blocks(0, n, [&](uint32_t b, uint32_t e) {
+                for (uint32_t j = b; j < e; ++j) mark_[bfs[j]] = j < f ? kFirst : kVisited;
+            });
+            blocks(0, n, [&](uint32_t b, uint32_t e) {
+                for (uint32_t j = b; j < e; ++j) {
+                    const uint32_t p = bfs[j], label = mark_[p];
+                    forNeighbours(p, [&](uint32_t q) {
+                        if (mark_[q] != label) cut(p, q);
+                    });
                 }
             });
         }
+        std::copy(bfs, bfs + n, list);
 
         // Peripheral starts for the halves, for free: the first part is a ball around the seed
         // whose last-reached triangle lies on its rim; the second part's first triangle borders
         // the first part. (The second part is a breadth-first order too, so its rim is its end.)
+        //
+        // Which halves are breadth-first orders of themselves from their first triangle, for the
+        // nodes they may become (split() then needs no search for a peripheral start): the first
+        // part when it is a prefix of the seed's search alone (the searches restricted to a prefix
+        // of a breadth-first order find the prefix in the same order: each triangle of it is
+        // reached from an earlier one), the second when it is one piece (its own search).
+        const bool firstSearched = target <= firstComponent && f == target, secondSearched = kept == 1;
         // Two large halves that are both bisected again are partitioned in parallel (at the top
         // of the tree there are fewer nodes than threads), each in a slice of the scratch (as
         // split() slices it for children) and with a stack of its own, the second's parts pushed
@@ -630,15 +600,15 @@ private:
             first.queue = s.queue, first.slack = g;
             second.queue = s.queue + f + g, second.slack = g;
             parallelForEach(0, 2, [&](size_t i) {
-                if (i == 0) partition(first, lo, lo + f, half, lo + f - 1, firstSearched, uint8_t(1 - r));
-                else partition(second, lo + f, hi, k - half, hi - 1, secondSearched, uint8_t(1 - r));
+                if (i == 0) partition(first, at, f, half, list[f - 1], firstSearched);
+                else partition(second, at + f, n - f, k - half, list[n - 1], secondSearched);
             });
             s.sizes.insert(s.sizes.end(), first.sizes.begin(), first.sizes.end());
             s.sizes.insert(s.sizes.end(), second.sizes.begin(), second.sizes.end());
             return;
         }
-        partition(s, lo, lo + f, half, lo + f - 1, firstSearched, uint8_t(1 - r));
-        partition(s, lo + f, hi, k - half, hi - 1, secondSearched, uint8_t(1 - r));
+        partition(s, at, f, half, list[f - 1], firstSearched);
+        partition(s, at + f, n - f, k - half, list[n - 1], secondSearched);
     }
 
     // Calls body(b, e) on blocks [b, e) covering [lo, hi): in parallel for a large range, whose
@@ -661,14 +631,13 @@ private:
     Hierarchy& out_;
     std::mt19937_64 rng_;
     Scratch root_;  // the root's, and every subtree's split on this thread
-    // Connectivity only, shared by parallel subtrees. By position: rows_ (rows, 3 each: a range's
-    // in one of the two, its halves' in the other; the second is the incidence array), mark_
-    // (labels during a bisection, then old -> new position). By triangle id, only when some row
-    // overflows: posOf_. rows_ and mark_ start unwritten (cullide/unwritten.h; zeroing the
-    // arrays of n or 3n entries was 12% of a 1M build).
-    Pages<uint32_t> rows_[2], mark_;
+    // Connectivity only, shared by parallel subtrees, by triangle: rows_ (3 each), mark_ (labels
+    // during a bisection), pieces_ (by the segment's offset). They start unwritten
+    // (cullide/unwritten.h; zeroing the arrays of n or 3n entries was 12% of a 1M build).
+    Pages<uint32_t> rows_, mark_, pieces_;
+    uint32_t rootSeed_ = kNone;  // the root's peripheral start (compact())
     Pages<uint32_t> queue_;  // the root's scratch, sliced for parallel subtrees
-    std::vector<uint32_t> overflow_, posOf_;
+    std::vector<uint32_t> overflow_;
 };
 
 }  // namespace
