@@ -53,11 +53,13 @@ uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
 //
 // Connectivity works on a list of the triangles, out_.order: a node, and every part of its
 // recursive bisection, is a segment of it, and a bisection reorders its segment (the hierarchy's
-// order is then the list). A triangle's face adjacency (its row) is kept restricted to the
-// smallest part it lies in: after each bisection, the rows on the cut between the two halves
-// lose their neighbours across it. So a search needs no membership test, and parts split in
-// parallel never read each other's triangles. Neither triangles nor rows move: only the cut
-// rows are written, and the rest of a bisection's cost is its searches.
+// order is then the list). Neither triangles nor their face adjacency (their rows) move: a
+// search keeps to its part by labels (no triangle outside it is kOpen or carries its bisection's
+// first-part label), and where parts are split in parallel (nodes of kParallelNode triangles and
+// more) the rows on the cut between a bisection's halves lose their neighbours across it, so
+// that no search reads another thread's labels. So a bisection writes only the cut rows, and its
+// cost is its searches. (Until session 22 every bisection moved its triangles and rebuilt its
+// halves' rows into a second array, a third of each level's cycles; the build is the same.)
 //
 // A row is three slots (a triangle has three edges), unused ones holding the triangle itself: a
 // triangle is labelled kVisited before its row is read, so it never passes for an open or first
@@ -95,6 +97,7 @@ struct Scratch {
     std::vector<Part> sizes;
     std::vector<uint32_t> pieceStart;
     std::vector<uint8_t> moved;
+    uint32_t labels = 0;  // first-part labels used: the next is Builder::kFirst - labels
     Pages<uint32_t> ownQueue;  // only where the parent's slack ran out
 
     void allocate(uint32_t n) {  // a queue of its own, for segments of up to n triangles
@@ -125,7 +128,8 @@ public:
         out_.nodes.push_back({0, n, 0, 0, 0});
         if (n <= opt_.leafSize) return;  // a leaf root: no adjacency to build
         if (opt_.kind == HierarchyKind::Connectivity) {
-            CULLIDE_CHECK(n < kFirst, "triangle count leaves room for the labels");
+            // Each bisection has a first-part label of its own, counting down from kFirst.
+            CULLIDE_CHECK(n < kFirst / 2, "triangle count leaves room for the labels");
             // Slack for a slice per parallel subtree: each level of parallel subtrees divides it
             // by the branching (a 1M build has two such levels); where it runs out, a subtree
             // allocates its own scratch.
@@ -315,7 +319,11 @@ private:
         if (opt_.kind == HierarchyKind::Connectivity) {
             const uint32_t last = out_.order[node.first + node.count - 1];
             const bool root = node.count == mark_.size();
-            partition(s, node.first, node.count, k, part.searched ? last : root ? rootSeed_ : kNone, part.searched);
+            partition(s, node.first, node.count, k,
+                      part.searched ? last
+                          : root    ? rootSeed_
+                                    : kNone,
+                      part.searched, node.count >= kParallelNode);
         } else {
             for (uint32_t c = 0; c < k; ++c) s.sizes.push_back({node.count / k + (c < node.count % k ? 1 : 0), false});
         }
@@ -345,6 +353,7 @@ private:
         parallelForEach(0, childCount, [&](size_t c) {
             sub[c] = {nodes[firstChild + c]};
             Scratch local;
+            local.labels = s.labels;
             if (opt_.kind == HierarchyKind::Connectivity) {
                 const size_t offset = sub[c][0].first - node.first;
                 if (childSlack >= 1) {
@@ -443,7 +452,7 @@ private:
     // `hint`: a triangle on the segment's periphery, when the caller knows one (kNone otherwise).
     // `searched`: the segment's order is a breadth-first order of the whole segment from its first
     // triangle (pushed with its size when the segment is a part).
-    void partition(Scratch& s, uint32_t at, uint32_t n, uint32_t k, uint32_t hint, bool searched) {
+    void partition(Scratch& s, uint32_t at, uint32_t n, uint32_t k, uint32_t hint, bool searched, bool isolate) {
         if (k < 2 || n < 2) {
             s.sizes.push_back({n, searched});
             return;
@@ -451,6 +460,7 @@ private:
         const uint32_t half = k / 2;
         const uint32_t target = uint32_t(std::max<size_t>(1, size_t(n) * half / k));
         uint32_t* const list = out_.order.data() + at;
+        const uint32_t first = kFirst - s.labels++;
         uint32_t* const pieces = pieces_.data() + at;
         auto labelOpen = [&] {
             blocks(0, n, [&](uint32_t b, uint32_t e) {
@@ -472,7 +482,7 @@ private:
         // Labels bfs[0, size) as the first part (the first `target`) and the rest kOpen, then
         // finds the pieces of the rest, one after another in `pieces`, started in the order of bfs.
         auto findPieces = [&] {
-            for (uint32_t i = 0; i < size; ++i) mark_[bfs[i]] = i < target ? kFirst : kOpen;
+            for (uint32_t i = 0; i < size; ++i) mark_[bfs[i]] = i < target ? first : kOpen;
             pieceEnd = 0;
             s.pieceStart.clear();
             for (uint32_t i = target; i < size; ++i) {
@@ -529,31 +539,36 @@ private:
             if (p == largest) continue;  // stays in the second part whatever it touches
             bool touchesFirst = false;
             for (uint32_t i = s.pieceStart[p]; i < s.pieceStart[p + 1] && !touchesFirst; ++i)
-                forNeighbours(pieces[i], [&](uint32_t u) { touchesFirst |= mark_[u] == kFirst; });
+                forNeighbours(pieces[i], [&](uint32_t u) { touchesFirst |= mark_[u] == first; });
             if (!touchesFirst) continue;
             s.moved[p] = 1;
             --kept;
             f += pieceSize(p);
         }
 
-        // Cut the rows between the halves, where the halves are bisected again or split. The cut
-        // edges join the seed's search's first `target` triangles (labelled kFirst) to the kept
-        // pieces (the stray pieces that move touch no other piece: pieces are the components of
-        // the rest); a kept piece's triangle on such an edge is a neighbour of the first part,
-        // so it is in bfs[target, size). So only those few rows are cut, once the moved pieces
-        // are labelled kFirst too. After the whole search (several components, rare) bfs holds
-        // every triangle, and every row of the segment keeps only the neighbours labelled as
-        // itself once the halves are labelled (below).
-        const bool rowsNeeded = needsRows(f, half) || needsRows(n - f, k - half);
+        // Where the parts of this node's partition are split in parallel (isolate), the rows are
+        // cut between the halves, where the halves are bisected again or split: no search of one
+        // part then reads another's labels. The cut edges join the seed's search's first `target`
+        // triangles (labelled `first`) to the kept pieces (the stray pieces that move touch no
+        // other piece: pieces are the components of the rest); a kept piece's triangle on such an
+        // edge is a neighbour of the first part, so it is in bfs[target, size). So only those few
+        // rows are cut, once the moved pieces are labelled `first` too. After the whole search
+        // (several components, rare) bfs holds every triangle, and every row of the segment keeps
+        // only the neighbours labelled as itself once the halves are labelled (below).
+        // Elsewhere the rows reach beyond a part, and its searches stay inside by labels alone:
+        // one thread splits the parts one after another, so no triangle outside the part being
+        // split is kOpen, and none is labelled with its bisection's `first`. (Cutting every
+        // bisection's rows made the 5k bunny's build 8% slower.)
+        const bool rowsNeeded = isolate && (needsRows(f, half) || needsRows(n - f, k - half));
         if (rowsNeeded && !whole) {
             for (size_t p = 0; p < pieceCount; ++p)
                 if (s.moved[p])
-                    for (uint32_t i = s.pieceStart[p]; i < s.pieceStart[p + 1]; ++i) mark_[pieces[i]] = kFirst;
+                    for (uint32_t i = s.pieceStart[p]; i < s.pieceStart[p + 1]; ++i) mark_[pieces[i]] = first;
             for (uint32_t i = target; i < size; ++i) {
                 const uint32_t p = bfs[i];
-                if (mark_[p] == kFirst) continue;  // in a moved piece
+                if (mark_[p] == first) continue;  // in a moved piece
                 forNeighbours(p, [&](uint32_t q) {
-                    if (mark_[q] != kFirst) return;
+                    if (mark_[q] != first) return;
                     cut(p, q);
                     cut(q, p);
                 });
@@ -567,7 +582,7 @@ private:
             if (!s.moved[p]) e = std::copy(pieces + s.pieceStart[p], pieces + s.pieceStart[p + 1], bfs + e) - bfs;
         if (rowsNeeded && whole) {
             blocks(0, n, [&](uint32_t b, uint32_t e) {
-                for (uint32_t j = b; j < e; ++j) mark_[bfs[j]] = j < f ? kFirst : kVisited;
+                for (uint32_t j = b; j < e; ++j) mark_[bfs[j]] = j < f ? first : kVisited;
             });
             blocks(0, n, [&](uint32_t b, uint32_t e) {
                 for (uint32_t j = b; j < e; ++j) {
@@ -596,19 +611,19 @@ private:
         // after the first's: the same parts in the same order.
         const size_t g = s.slack / 2;
         if (n >= kParallelNode && half >= 2 && f >= 2 && n - f >= 2 && g >= 1) {
-            Scratch first, second;
-            first.queue = s.queue, first.slack = g;
-            second.queue = s.queue + f + g, second.slack = g;
+            Scratch one, two;
+            one.queue = s.queue, one.slack = g, one.labels = s.labels;
+            two.queue = s.queue + f + g, two.slack = g, two.labels = s.labels;
             parallelForEach(0, 2, [&](size_t i) {
-                if (i == 0) partition(first, at, f, half, list[f - 1], firstSearched);
-                else partition(second, at + f, n - f, k - half, list[n - 1], secondSearched);
+                if (i == 0) partition(one, at, f, half, list[f - 1], firstSearched, isolate);
+                else partition(two, at + f, n - f, k - half, list[n - 1], secondSearched, isolate);
             });
-            s.sizes.insert(s.sizes.end(), first.sizes.begin(), first.sizes.end());
-            s.sizes.insert(s.sizes.end(), second.sizes.begin(), second.sizes.end());
+            s.sizes.insert(s.sizes.end(), one.sizes.begin(), one.sizes.end());
+            s.sizes.insert(s.sizes.end(), two.sizes.begin(), two.sizes.end());
             return;
         }
-        partition(s, at, f, half, list[f - 1], firstSearched);
-        partition(s, at + f, n - f, k - half, list[n - 1], secondSearched);
+        partition(s, at, f, half, list[f - 1], firstSearched, isolate);
+        partition(s, at + f, n - f, k - half, list[n - 1], secondSearched, isolate);
     }
 
     // Calls body(b, e) on blocks [b, e) covering [lo, hi): in parallel for a large range, whose
