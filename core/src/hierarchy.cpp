@@ -618,6 +618,7 @@ private:
                 if (i == 0) partition(one, at, f, half, list[f - 1], firstSearched, isolate);
                 else partition(two, at + f, n - f, k - half, list[n - 1], secondSearched, isolate);
             });
+            s.labels = std::max(one.labels, two.labels);  // none used twice in this subtree
             s.sizes.insert(s.sizes.end(), one.sizes.begin(), one.sizes.end());
             s.sizes.insert(s.sizes.end(), two.sizes.begin(), two.sizes.end());
             return;
