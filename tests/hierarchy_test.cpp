@@ -280,12 +280,12 @@ TEST(Hierarchy, BadOptions) {
     EXPECT_EQ(parseHierarchyKind("random"), HierarchyKind::Random);
 }
 
-// Random non-manifold meshes, every option corner: the flat build keeps rows restricted to each
-// part in the original rows' order (by triangle id), cutting them between a bisection's halves
-// (along the first part's rim in one search, or in full when stray pieces move or the part has
-// several components); a row with more than three neighbours goes through the overflow table,
-// cut as the slots are; leaf 1 and branching 64 push the bisection to single triangles and to
-// parts smaller than their share.
+// Random non-manifold meshes, every option corner: the rows keep the original order (by triangle
+// id) and reach beyond a part, whose searches stay inside by labels: stray pieces that move, and
+// the whole search over several components, must leave no triangle outside the part being split
+// open or labelled with its bisection's first-part label (one label shared by all bisections
+// fails here); a row with more than three neighbours goes through the overflow table; leaf 1 and
+// branching 64 push the bisection to single triangles and to parts smaller than their share.
 TEST(Hierarchy, ConnectivityMatchesReferenceOnRandomMeshes) {
     expectSameAsReference(randomMesh(1, 3000, 900), {1, 16, 1000}, {2, 3, 4, 64}, "pool 900");
     expectSameAsReference(randomMesh(2, 2000, 60), {1, 16}, {2, 4, 64}, "pool 60 (dense fans)");
@@ -308,8 +308,8 @@ TEST(Hierarchy, ConnectivityMatchesReferenceOnShuffledComponents) {
     expectSameAsReference(m, {1, 16, 1000}, {2, 3, 4, 64}, "shuffled grids");
 }
 
-// A shuffled grid large enough for the build to renumber it first (more than 4096 triangles, its
-// neighbours' ids far apart): the renumbering by a search from triangle 0 must keep every order
+// A shuffled grid large enough for the build to renumber it first (most of its neighbours' ids
+// more than 4096 apart): the renumbering by a search from triangle 0 must keep every order
 // by triangle id (rows, restarts), start the root's bisection from that search's last triangle,
 // and map the positions back to triangles at the end. Traps: another seed, a list left in
 // positions, an unshuffled mesh that is renumbered anyway (harmless here, only slower).
