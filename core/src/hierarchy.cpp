@@ -139,10 +139,11 @@ public:
             mark_.resize(n);
             root_.queue = queue_.data(), root_.slack = slack;
         }
-        const bool compacted = opt_.kind == HierarchyKind::Connectivity && scattered() && (compact(), true);
+        const bool compacted = opt_.kind == HierarchyKind::Connectivity && scattered();
+        if (compacted) compact();
         split(out_.nodes, 0, root_, {n, false});
         if (!compacted) return;
-        // The list holds positions: their triangles.
+        // The list holds positions (compact()): their triangles.
         const uint32_t* triangleAt = pieces_.data() + n;
         blocks(0, n, [&](uint32_t b, uint32_t e) {
             for (uint32_t j = b; j < e; ++j) out_.order[j] = triangleAt[out_.order[j]];
@@ -344,8 +345,8 @@ private:
             return;
         }
         // A node this large is the root or a parallel task's own root, so its scratch serves no
-        // later sibling: its children work in slices of it. Child c's slices start c slacks after
-        // its first position's, and hold its range and one slack more: disjoint.
+        // later sibling: its children work in slices of it. Child c's slice starts c slacks after
+        // its segment's offset, and holds its segment and one slack more: disjoint.
         const size_t childSlack = s.slack / childCount;
         std::vector<Part> parts(s.sizes.begin() + std::ptrdiff_t(base), s.sizes.end());
         s.sizes.resize(base);
@@ -647,8 +648,9 @@ private:
     Hierarchy& out_;
     std::mt19937_64 rng_;
     Scratch root_;  // the root's, and every subtree's split on this thread
-    // Connectivity only, shared by parallel subtrees, by triangle: rows_ (3 each), mark_ (labels
-    // during a bisection), pieces_ (by the segment's offset). They start unwritten
+    // Connectivity only, shared by parallel subtrees, by triangle (by position once compact()
+    // renumbered them): rows_ (3 each), mark_ (labels during a bisection), pieces_ (by the
+    // segment's offset). They start unwritten
     // (cullide/unwritten.h; zeroing the arrays of n or 3n entries was 12% of a 1M build).
     Pages<uint32_t> rows_, mark_, pieces_;
     uint32_t rootSeed_ = kNone;  // the root's peripheral start (compact())
