@@ -72,11 +72,18 @@ uint32_t* sortUnique(uint32_t* first, uint32_t* last) {
 template <typename T>
 using Pages = UnwrittenVector<T, true>;
 
-// A part of a node's partition: its size, and whether its order is a breadth-first order of the
-// whole part from its first triangle (see partition()).
+// A part of a node's partition: its size, and what its order tells of the search from its first
+// triangle, for the node it may become (see partition()):
+// - searched: the order is a breadth-first order of the whole part from its first triangle;
+// - ball: the order is a ball, a prefix of a breadth-first search from its first triangle over the
+//   segment the part was cut from, followed by stray pieces that touch it. rim: where the ball's
+//   last levels start in the order (the levels D - 2, D - 1 and D, the last, clamped at 0; for a
+//   ball of one level {0, 0, 1}).
 struct Part {
     uint32_t size;
     bool searched;
+    bool ball = false;
+    uint32_t rim[3] = {};
 };
 
 // What one thread's splits write besides the shared arrays, indexed from the start of the segment
@@ -364,7 +371,7 @@ private:
                       part.searched ? last
                           : root    ? rootSeed_
                                     : kNone,
-                      part.searched, node.count >= kParallelNode);
+                      part, node.count >= kParallelNode);
         } else {
             for (uint32_t c = 0; c < k; ++c) s.sizes.push_back({node.count / k + (c < node.count % k ? 1 : 0), false});
         }
@@ -439,10 +446,23 @@ private:
     // A three-slot row reads its three labels before writing any: its entries are distinct but
     // for repeats of the triangle itself (kVisited, left as is), so no write changes a label read
     // after it, and the loads no longer wait on the stores (the compiler cannot know that).
-    uint32_t grow(uint32_t* queue, uint32_t head, uint32_t size, uint32_t stop = kNone) {
+    // kLevels: with a search from one triangle (head 0, size 1), levels[0, 3) are the starts of
+    // the levels of the last three triangles expanded (oldest first; 0 where there are fewer), and
+    // *depth is the last one's level.
+    template <bool kLevels = false>
+    uint32_t grow(uint32_t* queue, uint32_t head, uint32_t size, uint32_t stop = kNone, uint32_t* levels = nullptr,
+                  uint32_t* depth = nullptr) {
         const uint32_t* rows = rows_.data();
         uint32_t* mark = mark_.data();
+        uint32_t levelEnd = size;
         for (; head < size && head < stop; ++head) {
+            if constexpr (kLevels) {
+                if (head == levelEnd) {
+                    levels[0] = levels[1], levels[1] = levels[2], levels[2] = head;
+                    ++*depth;
+                    levelEnd = size;
+                }
+            }
             if (head + 16 < size) __builtin_prefetch(rows + 3 * size_t(queue[head + 16]));
             const uint32_t* slot = rows + 3 * size_t(queue[head]);
             if (slot[0] != kEscape) {
@@ -491,11 +511,12 @@ private:
     // whose stray pieces (cut off from its largest piece, so bordered by the first part) move to
     // the first part. Sizes are therefore near-equal, not exact.
     // `hint`: a triangle on the segment's periphery, when the caller knows one (kNone otherwise).
-    // `searched`: the segment's order is a breadth-first order of the whole segment from its first
-    // triangle (pushed with its size when the segment is a part).
-    void partition(Scratch& s, uint32_t at, uint32_t n, uint32_t k, uint32_t hint, bool searched, bool isolate) {
+    // `self`: what is known of the segment's order (pushed with its size when the segment is a
+    // part; Part).
+    void partition(Scratch& s, uint32_t at, uint32_t n, uint32_t k, uint32_t hint, Part self, bool isolate) {
         if (k < 2 || n < 2) {
-            s.sizes.push_back({n, searched});
+            self.size = n;
+            s.sizes.push_back(self);
             return;
         }
         const uint32_t half = k / 2;
@@ -513,9 +534,27 @@ private:
         if (seed == kNone) {
             // The triangle farthest in hops from the segment's first one (ties: the last reached).
             uint32_t* queue = s.queue;
-            queue[0] = list[0];
-            mark_[queue[0]] = kVisited;
-            seed = queue[grow(queue, 0, 1) - 1];
+            if (self.ball) {
+                // A ball B of the search from the first triangle over a larger segment, then stray
+                // pieces M that touch it. The search over B + M goes as that search did until it
+                // expands a triangle next to M: B's triangles come in the same order, from the
+                // same triangles (any other way to them would run through triangles reached after
+                // them). And no triangle of B next to M lies before the ball's last level D but
+                // one: M was not reached before the ball ended, and neighbours' hops differ by at
+                // most one. So the search can resume where the other began to expand level D - 1:
+                // its queue then held the levels up to D - 1, and from there on it reads the
+                // labels of levels D - 2 and later only. (In the 1M bunny's build every node but
+                // the root that needs a seed was cut from a ball: their searches over 2.17M
+                // triangles in all now reach 0.25M, and the build takes 6-9% less time.)
+                const uint32_t* rim = self.rim;
+                for (uint32_t j = rim[0]; j < rim[2]; ++j) mark_[list[j]] = kVisited;
+                std::copy(list + rim[1], list + rim[2], queue);
+                seed = queue[grow(queue, 0, rim[2] - rim[1]) - 1];
+            } else {
+                queue[0] = list[0];
+                mark_[queue[0]] = kVisited;
+                seed = queue[grow(queue, 0, 1) - 1];
+            }
             labelOpen();
         }
         uint32_t* bfs = s.queue;
@@ -544,7 +583,8 @@ private:
         // search from the seed: a third of a bisection's searches.)
         mark_[seed] = kVisited;
         bfs[size++] = seed;
-        size = grow(bfs, 0, size, target);
+        uint32_t levels[3] = {0, 0, 0}, depth = 0;  // the first part's last levels' starts (Part::rim)
+        size = grow<true>(bfs, 0, size, target, levels, &depth);
         bool whole = size <= target;  // the seed's component ends within the first part
         if (!whole) {
             firstComponent = size;  // at most its size; only target <= firstComponent is read
@@ -647,26 +687,32 @@ private:
         // of a breadth-first order find the prefix in the same order: each triangle of it is
         // reached from an earlier one), the second when it is one piece (its own search).
         const bool firstSearched = target <= firstComponent && f == target, secondSearched = kept == 1;
+        Part one{f, firstSearched}, two{n - f, secondSearched};
+        if (!whole && !firstSearched) {  // the seed's search's prefix and the moved pieces
+            one.ball = true;
+            if (depth == 0) one.rim[0] = 0, one.rim[1] = 0, one.rim[2] = 1;
+            else one.rim[0] = depth >= 2 ? levels[0] : levels[1], one.rim[1] = levels[1], one.rim[2] = levels[2];
+        }
         // Two large halves that are both bisected again are partitioned in parallel (at the top
         // of the tree there are fewer nodes than threads), each in a slice of the scratch (as
         // split() slices it for children) and with a stack of its own, the second's parts pushed
         // after the first's: the same parts in the same order.
         const size_t g = s.slack / 2;
         if (n >= kParallelNode && half >= 2 && f >= 2 && n - f >= 2 && g >= 1) {
-            Scratch one, two;
-            one.queue = s.queue, one.slack = g, one.labels = s.labels;
-            two.queue = s.queue + f + g, two.slack = g, two.labels = s.labels;
+            Scratch sOne, sTwo;
+            sOne.queue = s.queue, sOne.slack = g, sOne.labels = s.labels;
+            sTwo.queue = s.queue + f + g, sTwo.slack = g, sTwo.labels = s.labels;
             parallelForEach(0, 2, [&](size_t i) {
-                if (i == 0) partition(one, at, f, half, list[f - 1], firstSearched, isolate);
-                else partition(two, at + f, n - f, k - half, list[n - 1], secondSearched, isolate);
+                if (i == 0) partition(sOne, at, f, half, list[f - 1], one, isolate);
+                else partition(sTwo, at + f, n - f, k - half, list[n - 1], two, isolate);
             });
-            s.labels = std::max(one.labels, two.labels);  // none used twice in this subtree
-            s.sizes.insert(s.sizes.end(), one.sizes.begin(), one.sizes.end());
-            s.sizes.insert(s.sizes.end(), two.sizes.begin(), two.sizes.end());
+            s.labels = std::max(sOne.labels, sTwo.labels);  // none used twice in this subtree
+            s.sizes.insert(s.sizes.end(), sOne.sizes.begin(), sOne.sizes.end());
+            s.sizes.insert(s.sizes.end(), sTwo.sizes.begin(), sTwo.sizes.end());
             return;
         }
-        partition(s, at, f, half, list[f - 1], firstSearched, isolate);
-        partition(s, at + f, n - f, k - half, list[n - 1], secondSearched, isolate);
+        partition(s, at, f, half, list[f - 1], one, isolate);
+        partition(s, at + f, n - f, k - half, list[n - 1], two, isolate);
     }
 
     // Calls body(b, e) on blocks [b, e) covering [lo, hi): in parallel for a large range, whose
