@@ -189,7 +189,11 @@ private:
         uint32_t* const counts[2] = {base, base + nv + 1};
         const Triangle* const tris = mesh_.triangles.data();
         const uint32_t halves[3] = {0, n / 2, n};
-        parallelForEach(0, 2, [&](size_t h) {
+        auto bothHalves = [n](const auto& body) {  // a small mesh's halves on this thread: no task
+            if (n >= kParallelNode) return parallelForEach(0, 2, body);
+            body(0), body(1);
+        };
+        bothHalves([&](size_t h) {
             uint32_t* const c = counts[h];
             std::fill(c, c + nv, 0u);
             for (uint32_t t = halves[h]; t < halves[h + 1]; ++t)
@@ -202,7 +206,7 @@ private:
             at += first + second;
         }
         Pages<uint32_t> incident(at);  // 3n
-        parallelForEach(0, 2, [&](size_t h) {
+        bothHalves([&](size_t h) {
             uint32_t* const cursor = counts[h];
             uint32_t* const inc = incident.data();
             for (uint32_t t = halves[h]; t < halves[h + 1]; ++t)
