@@ -174,8 +174,8 @@ private:
     // The incidence is built by the two halves of the triangles at once, each counting and then
     // filling in its own triangles, the second half's after the first's in each vertex's list: the
     // lists are in increasing triangle order, as one pass makes them, whatever the threads. (One
-    // pass, serial, was a tenth of a 1M build's wall time on two threads; the halves took 24 ->
-    // 10 ms there.) Their counts live in the root's queue where they fit, and the incidence array
+    // pass, serial, was a tenth of a 1M build's wall time on two threads; the halves took 21-23 ->
+    // 9-12 ms there.) Their counts live in the root's queue where they fit, and the incidence array
     // becomes the pieces' scratch: both are then written for the first time here, and their page
     // faults are paid once.
     void buildAdjacency() {
@@ -450,9 +450,9 @@ private:
     // A three-slot row reads its three labels before writing any: its entries are distinct but
     // for repeats of the triangle itself (kVisited, left as is), so no write changes a label read
     // after it, and the loads no longer wait on the stores (the compiler cannot know that).
-    // kLevels: with a search from one triangle (head 0, size 1), levels[0, 3) are the starts of
-    // the levels of the last three triangles expanded (oldest first; 0 where there are fewer), and
-    // *depth is the last one's level.
+    // kLevels: with a search from one triangle (head 0, size 1), levels[0, 3) are where the last
+    // three levels it expanded start (oldest first; 0 for levels before the first), and *depth is
+    // the last one's level.
     template <bool kLevels = false>
     uint32_t grow(uint32_t* queue, uint32_t head, uint32_t size, uint32_t stop = kNone, uint32_t* levels = nullptr,
                   uint32_t* depth = nullptr) {
