@@ -689,7 +689,8 @@ private:
         // nodes they may become (split() then needs no search for a peripheral start): the first
         // part when it is a prefix of the seed's search alone (the searches restricted to a prefix
         // of a breadth-first order find the prefix in the same order: each triangle of it is
-        // reached from an earlier one), the second when it is one piece (its own search).
+        // reached from an earlier one), the second when it is one piece (its own search). A first
+        // part that took stray pieces is a ball (Part): a node made of it resumes that search.
         const bool firstSearched = target <= firstComponent && f == target, secondSearched = kept == 1;
         Part one{f, firstSearched}, two{n - f, secondSearched};
         if (!whole && !firstSearched) {  // the seed's search's prefix and the moved pieces
