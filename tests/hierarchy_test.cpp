@@ -290,7 +290,7 @@ TEST(Hierarchy, BadOptions) {
 // fails here); a row with more than three neighbours goes through the overflow table; leaf 1 and
 // branching 64 push the bisection to single triangles and to parts smaller than their share.
 // A node cut from a ball and its stray pieces resumes its seed's search at the ball's last levels:
-// a rim without level D - 2 labelled, or started a level late, fails here and below.
+// a rim without level D - 2 labelled fails here and below (one started a level late crashes).
 TEST(Hierarchy, ConnectivityMatchesReferenceOnRandomMeshes) {
     expectSameAsReference(randomMesh(1, 3000, 900), {1, 16, 1000}, {2, 3, 4, 64}, "pool 900");
     expectSameAsReference(randomMesh(2, 2000, 60), {1, 16}, {2, 4, 64}, "pool 60 (dense fans)");
