@@ -450,12 +450,11 @@ private:
     // A three-slot row reads its three labels before writing any: its entries are distinct but
     // for repeats of the triangle itself (kVisited, left as is), so no write changes a label read
     // after it, and the loads no longer wait on the stores (the compiler cannot know that).
-    // kLevels: with a search from one triangle (head 0, size 1), levels[0, 3) are where the last
-    // three levels it expanded start (oldest first; 0 for levels before the first), and *depth is
-    // the last one's level.
+    // kLevels: with a search from one triangle (head 0, size 1) and levels[0, 3) zero, levels are
+    // then where the last three levels it expanded start (oldest first; 0 for levels before the
+    // first).
     template <bool kLevels = false>
-    uint32_t grow(uint32_t* queue, uint32_t head, uint32_t size, uint32_t stop = kNone, uint32_t* levels = nullptr,
-                  uint32_t* depth = nullptr) {
+    uint32_t grow(uint32_t* queue, uint32_t head, uint32_t size, uint32_t stop = kNone, uint32_t* levels = nullptr) {
         const uint32_t* rows = rows_.data();
         uint32_t* mark = mark_.data();
         uint32_t levelEnd = size;
@@ -463,7 +462,6 @@ private:
             if constexpr (kLevels) {
                 if (head == levelEnd) {
                     levels[0] = levels[1], levels[1] = levels[2], levels[2] = head;
-                    ++*depth;
                     levelEnd = size;
                 }
             }
@@ -587,8 +585,8 @@ private:
         // search from the seed: a third of a bisection's searches.)
         mark_[seed] = kVisited;
         bfs[size++] = seed;
-        uint32_t levels[3] = {0, 0, 0}, depth = 0;  // the first part's last levels' starts (Part::rim)
-        size = grow<true>(bfs, 0, size, target, levels, &depth);
+        uint32_t levels[3] = {0, 0, 0};  // the first part's last levels' starts (Part::rim)
+        size = grow<true>(bfs, 0, size, target, levels);
         bool whole = size <= target;  // the seed's component ends within the first part
         if (!whole) {
             firstComponent = size;  // at most its size; only target <= firstComponent is read
@@ -694,9 +692,10 @@ private:
         const bool firstSearched = target <= firstComponent && f == target, secondSearched = kept == 1;
         Part one{f, firstSearched}, two{n - f, secondSearched};
         if (!whole && !firstSearched) {  // the seed's search's prefix and the moved pieces
+            // Levels before the first start at 0, so they clamp themselves; a ball of one level
+            // (the seed) ends at 1.
             one.ball = true;
-            if (depth == 0) one.rim[0] = 0, one.rim[1] = 0, one.rim[2] = 1;
-            else one.rim[0] = depth >= 2 ? levels[0] : levels[1], one.rim[1] = levels[1], one.rim[2] = levels[2];
+            one.rim[0] = levels[0], one.rim[1] = levels[1], one.rim[2] = std::max(levels[2], 1u);
         }
         // Two large halves that are both bisected again are partitioned in parallel (at the top
         // of the tree there are fewer nodes than threads), each in a slice of the scratch (as
