@@ -33,8 +33,6 @@ Point toPoint(const Vec3d& p) {
     return Point(p.x(), p.y(), p.z());
 }
 
-constexpr double kO2dErrBound = (3.0 + 16.0 * 0x1p-53) * 0x1p-53;
-
 // Exact integer coordinates for n double values (n <= 12): all of them in integers of one power of
 // two (integerUnit); false when one is not a float or they span over 62 bits.
 bool toIntegers(const double* x, int n, int64_t* out) {
@@ -80,7 +78,7 @@ int orient2d(const Vec3d& p, const Vec3d& q, const Vec3d& r, int i, int j) {
     const double l = (q[i] - p[i]) * (r[j] - p[j]);
     const double rr = (q[j] - p[j]) * (r[i] - p[i]);
     const double det = l - rr;
-    const double bound = kO2dErrBound * (std::abs(l) + std::abs(rr));
+    const double bound = kOrient2dErrBound * (std::abs(l) + std::abs(rr));
     if (det > bound) return 1;
     if (-det > bound) return -1;
     const double x[6] = {p[i], p[j], q[i], q[j], r[i], r[j]};
@@ -108,7 +106,7 @@ bool orient2dCertainlyNonZero(const Vec3d& p, const Vec3d& q, const Vec3d& r, in
     const double l = (q[i] - p[i]) * (r[j] - p[j]);
     const double rr = (q[j] - p[j]) * (r[i] - p[i]);
     const double det = l - rr;
-    return std::abs(det) > kO2dErrBound * (std::abs(l) + std::abs(rr));
+    return std::abs(det) > kOrient2dErrBound * (std::abs(l) + std::abs(rr));
 }
 
 // Coplanar points, exactly: an axis pair (i, j) on which the non-degenerate triangle t projects

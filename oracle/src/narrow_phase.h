@@ -15,6 +15,7 @@
 #include "cullide/mesh.h"
 #include "cullide/predicates.h"
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -37,6 +38,13 @@ Plane planeOf(const Prim& prim);
 // The same from the corners (the setup's: not read back from a record just written, whose float
 // stores an 8-byte load would wait for).
 Plane planeOf(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2);
+// Whether the corners of planeOf(p0, p1, p2) are certainly not collinear: its n[k] and perm[k] are
+// orient2d's determinant and permanent on the axis pairs (1, 2), (2, 0) and (0, 1), evaluated as
+// collinear() evaluates them, so this is collinear()'s own filter. False: ask collinear().
+inline bool certainlyNotCollinear(const Plane& p) {
+    return (std::abs(p.n[0]) > kOrient2dErrBound * p.perm[0]) | (std::abs(p.n[1]) > kOrient2dErrBound * p.perm[1]) |
+        (std::abs(p.n[2]) > kOrient2dErrBound * p.perm[2]);
+}
 
 // Objects of more triangles than this have their primitive records in Morton order of their
 // first corner (cache locality of the narrow phase's reads); smaller ones keep the mesh's own

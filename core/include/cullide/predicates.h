@@ -39,6 +39,9 @@ namespace cullide {
 // a determinant evaluated as orient3d does (three differences, then the cofactor expansion)
 // whose magnitude exceeds this times the permanent has the exact determinant's sign.
 inline constexpr double kOrient3dErrBound = (7.0 + 56.0 * 0x1p-53) * 0x1p-53;
+// The same for orient2d, (3 + 16 eps) eps: (q_i - p_i)(r_j - p_j) - (q_j - p_j)(r_i - p_i)
+// evaluated in that order, against the sum of the two products' magnitudes.
+inline constexpr double kOrient2dErrBound = (3.0 + 16.0 * 0x1p-53) * 0x1p-53;
 
 // Sign (+1, 0, -1) of det[q - p, r - p, s - p]: +1 when s is on the positive side of the plane
 // through p, q, r oriented counterclockwise (CGAL::orientation's convention).
