@@ -1456,6 +1456,79 @@ TEST(Differential, DirectPathLongTrianglesWithSmallBoxes) {
     }
 }
 
+// Trap: the direct path sets up groups of eight triangles at once where each is a small
+// one-record triangle or has no record (setupSmallGroup8: the forms of the one-record lanes
+// written one after another, the others' flags counted); the first group that is not such, and
+// the rest of its block, go to the four-wide setup from the record the groups reached. A form
+// written at the wrong place when lanes without a record come before it, a rejected lane counted
+// as zero-area or the reverse, a group given up in its second half (a lane without a plane from
+// its vertices) leaving the first half's forms counted, or the rest of a block set up from the
+// wrong record would differ from the scalar path. ~1 px triangles and, in random lanes,
+// triangles whose box holds no pixel centre, triangles of zero snapped area, triangles left of
+// the viewport (rejected; some of them of zero area too), and, one in 40 or one in 400, one that
+// ends the groups: clipped (a corner beyond the far plane), larger (a box of 4 x 4 pixels), or
+// collinear in window coordinates but not after snapping; one and two threads against the
+// scalar path, statistics included.
+TEST(Differential, DirectPathGroupsOfEight) {
+    const DepthFormat formats[] = {DepthFormat::unorm(24), DepthFormat::float32(), DepthFormat::unorm(16)};
+    for (uint64_t seed = 0; seed < 6; ++seed) {
+        std::mt19937_64 rng(seed + 1100);
+        // Multiples of 1/256: exact in float and on the subpixel grid (S = 8), so collinear corners stay so.
+        auto ticks = [&](int n) { return float(int(rng() % uint64_t(n))) / 256.0f; };
+        const uint64_t stopEvery = seed % 2 ? 40 : 400;
+        RandomScene s;
+        for (int t = 0; t < 6000; ++t) {
+            const float x = float(1 + rng() % 13) + ticks(256), y = float(1 + rng() % 13) + ticks(256);
+            const float z = 0.1f + 0.8f * float(rng() % 1024) / 1024.0f;
+            const uint64_t kind = rng() % 16;
+            if (rng() % stopEvery == 0) {
+                const uint64_t stop = rng() % 3;
+                if (stop == 0) {  // clipped: one corner beyond the far plane
+                    s.geo.tri({x, y, z}, {x + 1.5f, y, 1.5f}, {x, y + 1.5f, z});
+                } else if (stop == 1) {  // larger: a box of 4 x 4 pixels
+                    s.geo.tri({x - 1.6f, y - 1.6f, z}, {x + 1.6f, y - 1.6f, z}, {x, y + 1.6f, z});
+                } else {  // collinear in window coordinates, not after snapping (S = 2)
+                    const float dx = float(rng() % 768) / 1024.0f, dy = float(rng() % 1536) / 1024.0f - 0.75f;
+                    s.geo.tri({x, y, z}, {x + dx, y + dy, z + 0.01f}, {x + 2 * dx, y + 2 * dy, z - 0.01f});
+                }
+            } else if (kind < 9) {  // ~1 px, one record
+                s.geo.tri({x, y, z}, {x + 1.5f - ticks(128), y + ticks(64), z + 0.01f},
+                          {x + ticks(64), y + 1.5f - ticks(128), z - 0.01f});
+            } else if (kind < 11) {  // inside the square between four pixel centres: no centre in the box
+                const float cx = std::floor(x) + 0.05f, cy = std::floor(y) + 0.05f;
+                s.geo.tri({cx, cy, z}, {cx + 0.3f, cy + ticks(64), z}, {cx + ticks(64), cy + 0.3f, z});
+            } else if (kind < 13) {  // zero snapped area: three collinear corners on the subpixel grid
+                const float dx = ticks(128), dy = ticks(128) - 0.25f;
+                s.geo.tri({x, y, z}, {x + dx, y + dy, z}, {x + 2 * dx, y + 2 * dy, z});
+            } else {  // left of the viewport, inside the guard band: rejected; every fourth flat too
+                const float lx = -1.0f - ticks(512), d = kind == 15 ? 0.0f : 1.5f;
+                s.geo.tri({lx, y, z}, {lx - 1.5f, y + d, z}, {lx - 0.75f, y + 1.5f - d / 2, z});
+            }
+        }
+        const uint32_t n = uint32_t(s.geo.triangles.size());
+        s.list.clear();
+        s.list.beginQuery(QueryKind::SamplesPassed);
+        s.list.draw(0, n / 2);  // two draws: the second starts inside a group of eight
+        s.list.endQuery();
+        s.list.depthFunc(DepthFunc::LEqual);
+        s.list.draw(n / 2, n - n / 2);
+        const OrthoView view = windowView(16, 16, formats[seed % 3]);
+        CpuBackendOptions ref;
+        ref.scalarReference = true;
+        ref.fillRule = seed % 2 ? FillRule::BottomLeft : FillRule::TopLeft;
+        ref.subpixelBits = seed < 3 ? 8 : 2;
+        const Outcome expected = run(s, view, ref);
+        // Armed: fragments, rejected and zero-area triangles; clipped ones where the groups stop often.
+        EXPECT_GT(expected.stats.fragments, 2000u) << "seed " << seed;
+        EXPECT_GT(expected.stats.rejected, 500u) << "seed " << seed;
+        EXPECT_GT(expected.stats.zeroArea, 500u) << "seed " << seed;
+        if (stopEvery == 40) {
+            EXPECT_GT(expected.stats.clipped, 10u) << "seed " << seed;
+        }
+        expectDirectOnThreads(s, view, ref, expected, "seed " + std::to_string(seed) + " " + view.depth.name());
+    }
+}
+
 // Trap: the tile kernel keeps a record's groups with fragments in batches (tile_kernels.cpp,
 // rasterizeInTileAvx2: up to 512 groups, and the depth plane of up to 512 rows), running a batch
 // when the next row might not fit. A batch run too late overflows them; one row's groups split

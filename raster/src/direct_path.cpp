@@ -76,18 +76,33 @@ struct Direct {
     // others' flags counted. Reads only the geometry: blocks may be prepared in parallel.
     void prepareBlock(Block& b) const {
         const SetupInput& g = in;
-        countHints(g.triangles, g.snapped.data(), params, batched, b.lo, b.hi, b.hint);
-        uint32_t n = 0, clips = 0;
+        uint32_t t = b.lo, n = 0;
         uint64_t rejected = 0, zeroArea = 0;
-        for (uint32_t t = b.lo; t < b.hi; ++t) {
+        // Groups of eight small triangles (and triangles without a record), counted and set up at
+        // once, while they last: a block of ~1 px triangles is these groups alone.
+        if (batched)
+            for (SmallGroup got; t + 8 <= b.hi; t += 8) {
+                const SmallOut forms{b.small + n, size_t(width), bits, isFloat};
+                if (!setupSmallGroup8(&g.triangles[t], g.window.data(), g.snapped.data(), params, forms, got)) break;
+                n += got.forms;
+                rejected += got.rejected;
+                zeroArea += got.zeroArea;
+            }
+        // The rest counted, then set up four at a time: batch slot m holds the triangle of record
+        // n0 + m.
+        const uint32_t t0 = t, n0 = n;
+        countHints(g.triangles, g.snapped.data(), params, batched, t0, b.hi, b.hint);
+        uint32_t clips = 0;
+        for (; t < b.hi; ++t) {
+            const uint32_t m = n - n0;
             // Eight one-record triangles starting a batch (the common case of small triangles):
             // two whole batches, without the flags' bookkeeping.
             constexpr uint64_t kBytes = 0x0101010101010101;
             uint64_t h8 = 0;
-            if (n % 4 == 0 && t + 8 <= b.hi) std::memcpy(&h8, &b.hint[t - b.lo], 8);
+            if (m % 4 == 0 && t + 8 <= b.hi) std::memcpy(&h8, &b.hint[t - t0], 8);
             if ((h8 & kBytes * (kHintOne | kHintClip)) == kBytes * kHintOne) {
                 for (uint32_t q = 0; q < 8; ++q) {
-                    InsideBatch& batch = b.batch[n / 4 + q / 4];
+                    InsideBatch& batch = b.batch[m / 4 + q / 4];
                     const Triangle& tri = g.triangles[t + q];
                     for (int k = 0; k < 3; ++k) batch.v[k][q % 4] = tri[k];
                     batch.clockwise[q % 4] = h8 >> (8 * q) & kHintCw ? -1 : 0;
@@ -97,10 +112,10 @@ struct Direct {
                 continue;
             }
             // A triangle without a record is written to the next lane too, which the next one overwrites.
-            const uint8_t h = b.hint[t - b.lo];
-            InsideBatch& batch = b.batch[n / 4];
-            for (int k = 0; k < 3; ++k) batch.v[k][n % 4] = g.triangles[t][k];
-            batch.clockwise[n % 4] = h & kHintCw ? -1 : 0;
+            const uint8_t h = b.hint[t - t0];
+            InsideBatch& batch = b.batch[m / 4];
+            for (int k = 0; k < 3; ++k) batch.v[k][m % 4] = g.triangles[t][k];
+            batch.clockwise[m % 4] = h & kHintCw ? -1 : 0;
             if (h & kHintClip) {
                 b.clipAt[clips][0] = t;
                 b.clipAt[clips++][1] = n;
@@ -118,14 +133,15 @@ struct Direct {
         // a block without AVX2's setup, all of them without) keep the pixel loop.
         uint32_t k = 0;
         if (batched)
-            for (; k + 4 <= n; k += 4) {
-                EdgeTri* const out[4] = {&b.recs[k], &b.recs[k + 1], &b.recs[k + 2], &b.recs[k + 3]};
-                const SmallOut forms{b.small + k, size_t(width), bits, isFloat};
+            for (; k + 4 <= n - n0; k += 4) {
+                EdgeTri* const r = b.recs + n0 + k;
+                EdgeTri* const out[4] = {r, r + 1, r + 2, r + 3};
+                const SmallOut forms{b.small + n0 + k, size_t(width), bits, isFloat};
                 setupInsideEdgeTri4(b.batch[k / 4], g.window.data(), g.snapped.data(), params, out, &forms);
             }
-        for (; k < n; ++k) {
-            setupInsideLane(b.batch[k / 4], int(k % 4), g.window.data(), g.snapped.data(), params, b.recs[k]);
-            b.small[k].lanes = kNotSmall;
+        for (; k < n - n0; ++k) {
+            setupInsideLane(b.batch[k / 4], int(k % 4), g.window.data(), g.snapped.data(), params, b.recs[n0 + k]);
+            b.small[n0 + k].lanes = kNotSmall;
         }
     }
 

@@ -1,6 +1,8 @@
 // Triangle records for the fast path of the CPU backend (records.h).
 #include "records.h"
 
+#include "snap_lanes.h"
+
 #include "cullide/error.h"
 #include "cullide/parallel.h"
 
@@ -232,61 +234,18 @@ struct NoScratch {};
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 
 // The count pass on the eight triangles tris[0..8) at once with AVX2: writes their hints to
-// hint[0..8) and returns their records, as countHints does one by one (integers only:
-// the same verdicts). A SnapVertex is three 32-bit words (x, y, then inside and beyond in the low
-// bytes of the third), loaded one by one into the lanes: AVX2's gathers were slower here (an AMD
-// EPYC; an A/B of BM_Prune, bunny 270k, one thread: 536, 532 -> 508, 504 ms without them, and
-// gathering the setup's window vertices too made it 559 -> 756 ms).
-static_assert(sizeof(SnapVertex) == 12 && offsetof(SnapVertex, y) == 4 && offsetof(SnapVertex, inside) == 8 &&
-              offsetof(SnapVertex, beyond) == 9);
+// hint[0..8) and returns their records, as countHints does one by one (snapLanes8: the same
+// verdicts).
 __attribute__((target("avx2"))) uint32_t countHints8(const Triangle* tris, const SnapVertex* snapped,
                                                      const SetupParams& params, uint8_t* hint) {
-    const int* const words = reinterpret_cast<const int*>(snapped);
+    const SnapLanes8 s = snapLanes8(tris, snapped, params);
     const __m256i ones = _mm256_set1_epi32(-1);
-    __m256i x[3], y[3], f = ones;
-    for (int k = 0; k < 3; ++k) {
-        const int* w[8];
-        for (int l = 0; l < 8; ++l) w[l] = words + 3 * size_t(tris[l][k]);
-        x[k] = _mm256_setr_epi32(w[0][0], w[1][0], w[2][0], w[3][0], w[4][0], w[5][0], w[6][0], w[7][0]);
-        y[k] = _mm256_setr_epi32(w[0][1], w[1][1], w[2][1], w[3][1], w[4][1], w[5][1], w[6][1], w[7][1]);
-        f = _mm256_and_si256(f,
-                             _mm256_setr_epi32(w[0][2], w[1][2], w[2][2], w[3][2], w[4][2], w[5][2], w[6][2], w[7][2]));
-    }
-    const __m256i zero = _mm256_setzero_si256(), byte = _mm256_set1_epi32(0xFF);
-    const __m256i inside = _mm256_cmpeq_epi32(_mm256_and_si256(f, byte), _mm256_set1_epi32(1));
-    const __m256i rejected =
-        _mm256_xor_si256(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_srli_epi32(f, 8), byte), zero), ones);
-    // The orientation determinant in 64 bits: even lanes, then odd ones shifted down.
-    const __m256i dx1 = _mm256_sub_epi32(x[1], x[0]), dy2 = _mm256_sub_epi32(y[2], y[0]);
-    const __m256i dx2 = _mm256_sub_epi32(x[2], x[0]), dy1 = _mm256_sub_epi32(y[1], y[0]);
-    const __m256i even = _mm256_sub_epi64(_mm256_mul_epi32(dx1, dy2), _mm256_mul_epi32(dx2, dy1));
-    const __m256i odd = _mm256_sub_epi64(_mm256_mul_epi32(_mm256_srli_epi64(dx1, 32), _mm256_srli_epi64(dy2, 32)),
-                                         _mm256_mul_epi32(_mm256_srli_epi64(dx2, 32), _mm256_srli_epi64(dy1, 32)));
-    const __m256i flat = _mm256_blend_epi32(_mm256_cmpeq_epi64(even, zero), _mm256_cmpeq_epi64(odd, zero), 0xAA);
-    const __m256i cw = _mm256_blend_epi32(_mm256_cmpgt_epi64(zero, even), _mm256_cmpgt_epi64(zero, odd), 0xAA);
-    // boxHoldsCentre in 32 bits (|coordinate| <= 2^29 inside the clip volume).
-    const __m128i s = _mm_cvtsi32_si128(params.subpixelBits);
-    const __m256i half = _mm256_set1_epi32(1 << (params.subpixelBits - 1));
-    const __m256i minx = _mm256_min_epi32(_mm256_min_epi32(x[0], x[1]), x[2]);
-    const __m256i maxx = _mm256_max_epi32(_mm256_max_epi32(x[0], x[1]), x[2]);
-    const __m256i miny = _mm256_min_epi32(_mm256_min_epi32(y[0], y[1]), y[2]);
-    const __m256i maxy = _mm256_max_epi32(_mm256_max_epi32(y[0], y[1]), y[2]);
-    const __m256i lox =
-        _mm256_max_epi32(_mm256_sub_epi32(zero, _mm256_sra_epi32(_mm256_sub_epi32(half, minx), s)), zero);
-    const __m256i hix =
-        _mm256_min_epi32(_mm256_sra_epi32(_mm256_sub_epi32(maxx, half), s), _mm256_set1_epi32(params.width - 1));
-    const __m256i loy =
-        _mm256_max_epi32(_mm256_sub_epi32(zero, _mm256_sra_epi32(_mm256_sub_epi32(half, miny), s)), zero);
-    const __m256i hiy =
-        _mm256_min_epi32(_mm256_sra_epi32(_mm256_sub_epi32(maxy, half), s), _mm256_set1_epi32(params.height - 1));
-    const __m256i empty = _mm256_or_si256(_mm256_cmpgt_epi32(lox, hix), _mm256_cmpgt_epi32(loy, hiy));
-    const __m256i one = _mm256_andnot_si256(_mm256_or_si256(flat, empty), inside);
     // clip ? kHintClip : one ? kHintOne | cw : rejected ? kRejected : flat ? kZeroArea : 0.
-    __m256i h = _mm256_blendv_epi8(_mm256_and_si256(flat, _mm256_set1_epi32(kZeroArea)), _mm256_set1_epi32(kRejected),
-                                   rejected);
+    __m256i h = _mm256_blendv_epi8(_mm256_and_si256(s.flat, _mm256_set1_epi32(kZeroArea)), _mm256_set1_epi32(kRejected),
+                                   s.rejected);
     h = _mm256_blendv_epi8(
-        h, _mm256_or_si256(_mm256_set1_epi32(kHintOne), _mm256_and_si256(cw, _mm256_set1_epi32(kHintCw))), one);
-    h = _mm256_blendv_epi8(_mm256_set1_epi32(kHintClip), h, inside);
+        h, _mm256_or_si256(_mm256_set1_epi32(kHintOne), _mm256_and_si256(s.cw, _mm256_set1_epi32(kHintCw))), s.one);
+    h = _mm256_blendv_epi8(_mm256_set1_epi32(kHintClip), h, s.inside);
     // The low byte of each lane, eight bytes in triangle order.
     const __m256i low =
         _mm256_shuffle_epi8(h,
@@ -295,7 +254,7 @@ __attribute__((target("avx2"))) uint32_t countHints8(const Triangle* tris, const
     const uint32_t first = uint32_t(_mm256_extract_epi32(low, 0)), second = uint32_t(_mm256_extract_epi32(low, 4));
     std::memcpy(hint, &first, 4);
     std::memcpy(hint + 4, &second, 4);
-    const __m256i counted = _mm256_or_si256(_mm256_xor_si256(inside, ones), one);
+    const __m256i counted = _mm256_or_si256(_mm256_xor_si256(s.inside, ones), s.one);
     return uint32_t(std::popcount(uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(counted)))));
 }
 

@@ -6,11 +6,13 @@
 #include "triangle_setup.h"
 
 #include "depth_simd.h"
+#include "snap_lanes.h"
 
 #include "cullide/error.h"
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdlib>
 
@@ -292,12 +294,13 @@ __attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s,
     return _mm256_or_si256(_mm256_srl_epi64(v, s), _mm256_sll_epi64(negative, rest));
 }
 
-// The small forms (SmallFrags) of the four lanes of setupInsideEdgeTri4, from its registers: per
-// pixel of the 2 x 2 block at (i0, j0), whether the record's edge functions are all >= 0 there, and
-// the depth (z0 + dzdy*((j + 0.5) - y0)) + dzdx*((i + 0.5) - x0), DepthPlane's operations in its
-// order, so the same fragments and codes as the pixel loops. `planeOk`: the lanes whose plane is
-// these registers' (the others were set up by the scalar step). Returns the lanes given a form (the
-// others get kNotSmall).
+// The small forms (SmallFrags) of four lanes set up in registers (setupInsideEdgeTri4,
+// setupSmallGroup8): per pixel of the 2 x 2 block at (i0, j0), whether the record's edge functions
+// are all >= 0 there, and the depth (z0 + dzdy*((j + 0.5) - y0)) + dzdx*((i + 0.5) - x0),
+// DepthPlane's operations in its order, so the same fragments and codes as the pixel loops.
+// `planeOk`: the lanes whose plane is these registers' (the others were set up by the scalar
+// step). The lanes in `write` are stored to small.out[0..), in order (setupInsideEdgeTri4: all
+// four, to out[l]). Returns the lanes given a form (the others get kNotSmall).
 //
 // The edge tests in 32 bits, from the block's corner: the record's E(i, j) = floor(c'(i, j) / 2^S)
 // is >= 0 iff c'(i, j) >= 0, where c'(i, j) = 2^S*(a*i + b*j) + c' is the snapped edge function at
@@ -309,11 +312,10 @@ __attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s,
 // triangle is not); this replaced 64-bit products and sums for 4 pixels x 3 edges.
 // The depths share their terms: a row's z0 + dzdy*(...) for both pixels of the row, a column's
 // dzdx*(...) for both of the column.
-__attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i j0, __m128i j1, const __m128i x[3],
-                                                const __m128i y[3], const __m128i dx[3], const __m128i dy[3],
-                                                const __m128i exclusive[3], __m128i s, __m128i half, __m256d x0,
-                                                __m256d y0, __m256d z0, __m256d dzdx, __m256d dzdy, int planeOk,
-                                                const SmallOut& small) {
+__attribute__((target("avx2"), always_inline)) inline int smallForms4(
+    __m128i i0, __m128i i1, __m128i j0, __m128i j1, const __m128i x[3], const __m128i y[3], const __m128i dx[3],
+    const __m128i dy[3], const __m128i exclusive[3], __m128i s, __m128i half, __m256d x0, __m256d y0, __m256d z0,
+    __m256d dzdx, __m256d dzdy, int planeOk, int write, const SmallOut& small) {
     static_assert(kMaxSubpixelBits <= 12, "smallForms4's 32-bit edge sums");
     const __m128i one = _mm_set1_epi32(1), two = _mm_set1_epi32(2);
     const __m128i w = _mm_sub_epi32(i1, i0), h = _mm_sub_epi32(j1, j0);  // >= 0: the box holds a centre
@@ -329,7 +331,8 @@ __attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i 
     const int smallLanes = fits & planeOk;
     SmallFrags* const out = small.out;
     if (smallLanes == 0) {
-        for (int l = 0; l < 4; ++l) out[l].lanes = kNotSmall;
+        for (int l = 0, c = 0; l < 4; ++l)
+            if (write >> l & 1) out[c++].lanes = kNotSmall;
         return 0;
     }
     const int wide = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(w, one)));
@@ -380,13 +383,87 @@ __attribute__((target("avx2"))) int smallForms4(__m128i i0, __m128i i1, __m128i 
     alignas(16) int32_t ci[4], cj[4];
     _mm_store_si128(reinterpret_cast<__m128i*>(ci), i0);
     _mm_store_si128(reinterpret_cast<__m128i*>(cj), j0);
-    for (int l = 0; l < 4; ++l) {  // a lane without a form is marked; its other fields are not read
-        SmallFrags& f = out[l];
+    // Every lane is stored at the next place, which advances past the lanes in `write` only: the
+    // others are overwritten by the next lane or lie past the last (out[0..4) is writable).
+    for (int l = 0, c = 0; l < 4; ++l) {  // a lane without a form is marked; its other fields are not read
+        SmallFrags& f = out[c];
         f.pixel = uint32_t(size_t(cj[l]) * small.stride + size_t(ci[l]));
         f.lanes = smallLanes >> l & 1 ? perLane >> (8 * l) & 15 : kNotSmall;
         _mm_storeu_ps(reinterpret_cast<float*>(f.z), codes[l]);
+        c += write >> l & 1;
     }
     return smallLanes;
+}
+
+// The sub-triangle of four lanes (setupInsideEdgeTri's): vertex 0, then 1 and 2 swapped in the
+// clockwise lanes `cw`; each edge's differences and fill-rule offset, as makeEdgeTri.
+struct Edges4 {
+    __m128i x[3], y[3], dx[3], dy[3], exclusive[3];
+};
+__attribute__((target("avx2"), always_inline)) inline Edges4 edges4(const __m128i sx[3], const __m128i sy[3],
+                                                                    __m128i cw, FillRule fillRule) {
+    const __m128i zero = _mm_setzero_si128();
+    Edges4 e{{sx[0], _mm_blendv_epi8(sx[1], sx[2], cw), _mm_blendv_epi8(sx[2], sx[1], cw)},
+             {sy[0], _mm_blendv_epi8(sy[1], sy[2], cw), _mm_blendv_epi8(sy[2], sy[1], cw)},
+             {},
+             {},
+             {}};
+    const bool bottomLeft = fillRule == FillRule::BottomLeft;
+    for (int k = 0; k < 3; ++k) {
+        const int n = k == 2 ? 0 : k + 1;
+        e.dx[k] = _mm_sub_epi32(e.x[n], e.x[k]);
+        e.dy[k] = _mm_sub_epi32(e.y[n], e.y[k]);
+        const __m128i along = bottomLeft ? _mm_cmpgt_epi32(e.dx[k], zero) : _mm_cmpgt_epi32(zero, e.dx[k]);
+        const __m128i inclusive =
+            _mm_or_si128(_mm_cmpgt_epi32(zero, e.dy[k]), _mm_and_si128(_mm_cmpeq_epi32(e.dy[k], zero), along));
+        e.exclusive[k] = _mm_andnot_si128(inclusive, _mm_set1_epi32(1));
+    }
+    return e;
+}
+
+// The depth planes of four triangles, as planeFrom, in each triangle's own vertex order: lane l's
+// vertex k is window[v[k][l]]. `ok`: the lanes where planeFrom succeeds.
+struct Plane4 {
+    __m256d x0, y0, z0, dzdx, dzdy;
+    int ok;
+};
+__attribute__((target("avx2"), always_inline)) inline Plane4 plane4(const uint32_t v[3][4], const WinVertex* window) {
+    // Each vertex's coordinates loaded into its lane (AVX2's gathers were slower: snap_lanes.h).
+    __m256d wx[3], wy[3], wz[3];
+    for (int k = 0; k < 3; ++k) {
+        const WinVertex *w0 = &window[v[k][0]], *w1 = &window[v[k][1]], *w2 = &window[v[k][2]], *w3 = &window[v[k][3]];
+        wx[k] = _mm256_setr_pd(w0->x, w1->x, w2->x, w3->x);
+        wy[k] = _mm256_setr_pd(w0->y, w1->y, w2->y, w3->y);
+        wz[k] = _mm256_setr_pd(w0->z, w1->z, w2->z, w3->z);
+    }
+    Plane4 p;
+    p.x0 = wx[0];
+    p.y0 = wy[0];
+    p.z0 = wz[0];
+    const __m256d x1 = _mm256_sub_pd(wx[1], p.x0), y1 = _mm256_sub_pd(wy[1], p.y0), z1 = _mm256_sub_pd(wz[1], p.z0);
+    const __m256d x2 = _mm256_sub_pd(wx[2], p.x0), y2 = _mm256_sub_pd(wy[2], p.y0), z2 = _mm256_sub_pd(wz[2], p.z0);
+    const __m256d det = _mm256_sub_pd(_mm256_mul_pd(x1, y2), _mm256_mul_pd(x2, y1));
+    p.dzdx = _mm256_div_pd(_mm256_sub_pd(_mm256_mul_pd(z1, y2), _mm256_mul_pd(z2, y1)), det);
+    p.dzdy = _mm256_div_pd(_mm256_sub_pd(_mm256_mul_pd(x1, z2), _mm256_mul_pd(x2, z1)), det);
+    // planeFrom fails on a zero or non-finite det or gradient (|v| < inf is false for NaN too).
+    const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+    const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));
+    const __m256d finiteDet = _mm256_cmp_pd(_mm256_and_pd(det, absMask), inf, _CMP_LT_OQ);
+    const __m256d finiteX = _mm256_cmp_pd(_mm256_and_pd(p.dzdx, absMask), inf, _CMP_LT_OQ);
+    const __m256d finiteY = _mm256_cmp_pd(_mm256_and_pd(p.dzdy, absMask), inf, _CMP_LT_OQ);
+    const __m256d ok = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(det, _mm256_setzero_pd(), _CMP_NEQ_OQ), finiteDet),
+                                     _mm256_and_pd(finiteX, finiteY));
+    p.ok = _mm256_movemask_pd(ok);
+    return p;
+}
+
+// Bit l set where lane l of the mask m is.
+__attribute__((target("avx2"))) inline int laneBits8(__m256i m) {
+    return _mm256_movemask_ps(_mm256_castsi256_ps(m));
+}
+// Lanes 4h..4h+3 of v.
+__attribute__((target("avx2"))) inline __m128i lanesOf(__m256i v, int h) {
+    return h == 0 ? _mm256_castsi256_si128(v) : _mm256_extracti128_si256(v, 1);
 }
 
 }  // namespace
@@ -397,24 +474,15 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
     const int S = params.subpixelBits;
     const __m128i s = _mm_cvtsi32_si128(S), rest = _mm_cvtsi32_si128(64 - S);
     const __m128i zero = _mm_setzero_si128(), half = _mm_set1_epi32(1 << (S - 1));
-    // Each vertex's coordinates loaded into its lane (AVX2's gathers were slower: records.cpp).
     __m128i sx[3], sy[3];
-    __m256d wx[3], wy[3], wz[3];
     for (int k = 0; k < 3; ++k) {
         const SnapVertex *s0 = &snapped[b.v[k][0]], *s1 = &snapped[b.v[k][1]], *s2 = &snapped[b.v[k][2]],
                          *s3 = &snapped[b.v[k][3]];
-        const WinVertex *w0 = &window[b.v[k][0]], *w1 = &window[b.v[k][1]], *w2 = &window[b.v[k][2]],
-                        *w3 = &window[b.v[k][3]];
         sx[k] = _mm_setr_epi32(s0->x, s1->x, s2->x, s3->x);
         sy[k] = _mm_setr_epi32(s0->y, s1->y, s2->y, s3->y);
-        wx[k] = _mm256_setr_pd(w0->x, w1->x, w2->x, w3->x);
-        wy[k] = _mm256_setr_pd(w0->y, w1->y, w2->y, w3->y);
-        wz[k] = _mm256_setr_pd(w0->z, w1->z, w2->z, w3->z);
     }
-    // The sub-triangle's vertices: 0, then 1 and 2 swapped in the clockwise lanes.
-    const __m128i cw = _mm_load_si128(reinterpret_cast<const __m128i*>(b.clockwise));
-    const __m128i x[3] = {sx[0], _mm_blendv_epi8(sx[1], sx[2], cw), _mm_blendv_epi8(sx[2], sx[1], cw)};
-    const __m128i y[3] = {sy[0], _mm_blendv_epi8(sy[1], sy[2], cw), _mm_blendv_epi8(sy[2], sy[1], cw)};
+    const Edges4 e = edges4(sx, sy, _mm_load_si128(reinterpret_cast<const __m128i*>(b.clockwise)), params.fillRule);
+    const __m128i(&x)[3] = e.x, (&y)[3] = e.y;
     // The box (32 bits suffice: |coordinate| <= 2^29), as makeEdgeTri: ceilShift(m - half) is
     // -((half - m) >> S).
     const __m128i minx = _mm_min_epi32(_mm_min_epi32(x[0], x[1]), x[2]);
@@ -425,37 +493,11 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
     const __m128i i1 = _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxx, half), s), _mm_set1_epi32(params.width - 1));
     const __m128i j0 = _mm_max_epi32(_mm_sub_epi32(zero, _mm_sra_epi32(_mm_sub_epi32(half, miny), s)), zero);
     const __m128i j1 = _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxy, half), s), _mm_set1_epi32(params.height - 1));
-    // The edges' differences and fill-rule offsets, as makeEdgeTri.
-    const bool bottomLeft = params.fillRule == FillRule::BottomLeft;
-    __m128i edx[3], edy[3], excl[3];
-    for (int k = 0; k < 3; ++k) {
-        const int n = k == 2 ? 0 : k + 1;
-        edx[k] = _mm_sub_epi32(x[n], x[k]);
-        edy[k] = _mm_sub_epi32(y[n], y[k]);
-        const __m128i along = bottomLeft ? _mm_cmpgt_epi32(edx[k], zero) : _mm_cmpgt_epi32(zero, edx[k]);
-        const __m128i inclusive =
-            _mm_or_si128(_mm_cmpgt_epi32(zero, edy[k]), _mm_and_si128(_mm_cmpeq_epi32(edy[k], zero), along));
-        excl[k] = _mm_andnot_si128(inclusive, _mm_set1_epi32(1));
-    }
-    // The depth plane, as planeFrom, in the triangle's own vertex order.
-    const __m256d x0 = wx[0], y0 = wy[0], z0 = wz[0];
-    const __m256d x1 = _mm256_sub_pd(wx[1], x0), y1 = _mm256_sub_pd(wy[1], y0), z1 = _mm256_sub_pd(wz[1], z0);
-    const __m256d x2 = _mm256_sub_pd(wx[2], x0), y2 = _mm256_sub_pd(wy[2], y0), z2 = _mm256_sub_pd(wz[2], z0);
-    const __m256d det = _mm256_sub_pd(_mm256_mul_pd(x1, y2), _mm256_mul_pd(x2, y1));
-    const __m256d dzdx = _mm256_div_pd(_mm256_sub_pd(_mm256_mul_pd(z1, y2), _mm256_mul_pd(z2, y1)), det);
-    const __m256d dzdy = _mm256_div_pd(_mm256_sub_pd(_mm256_mul_pd(x1, z2), _mm256_mul_pd(x2, z1)), det);
-    // planeFrom fails on a zero or non-finite det or gradient (|v| < inf is false for NaN too).
-    const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
-    const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));
-    const __m256d finiteDet = _mm256_cmp_pd(_mm256_and_pd(det, absMask), inf, _CMP_LT_OQ);
-    const __m256d finiteX = _mm256_cmp_pd(_mm256_and_pd(dzdx, absMask), inf, _CMP_LT_OQ);
-    const __m256d finiteY = _mm256_cmp_pd(_mm256_and_pd(dzdy, absMask), inf, _CMP_LT_OQ);
-    const __m256d ok = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(det, _mm256_setzero_pd(), _CMP_NEQ_OQ), finiteDet),
-                                     _mm256_and_pd(finiteX, finiteY));
-    const int planeOk = _mm256_movemask_pd(ok);
+    const Plane4 p = plane4(b.v, window);
     // The lanes with a small form need no record (the direct path reads only the others').
-    const int formed =
-        small ? smallForms4(i0, i1, j0, j1, x, y, edx, edy, excl, s, half, x0, y0, z0, dzdx, dzdy, planeOk, *small) : 0;
+    const int formed = small ? smallForms4(i0, i1, j0, j1, x, y, e.dx, e.dy, e.exclusive, s, half, p.x0, p.y0, p.z0,
+                                           p.dzdx, p.dzdy, p.ok, 15, *small)
+                             : 0;
     if (formed == 15) return;
     // The records of the other lanes: the box, and the edges' constants in 64 bits
     // (_mm256_mul_epi32 multiplies the low 32 bits of each lane, signed: every factor fits them).
@@ -467,37 +509,77 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
     alignas(16) int32_t ea[3][4], eb[3][4];
     alignas(32) int64_t ec[3][4];
     for (int k = 0; k < 3; ++k) {
-        const __m256i p =
-            _mm256_mul_epi32(_mm256_cvtepi32_epi64(edx[k]), _mm256_cvtepi32_epi64(_mm_sub_epi32(half, y[k])));
-        const __m256i q =
-            _mm256_mul_epi32(_mm256_cvtepi32_epi64(edy[k]), _mm256_cvtepi32_epi64(_mm_sub_epi32(half, x[k])));
-        const __m256i c = _mm256_sub_epi64(_mm256_sub_epi64(p, q), _mm256_cvtepi32_epi64(excl[k]));
-        _mm_store_si128(reinterpret_cast<__m128i*>(ea[k]), _mm_sub_epi32(zero, edy[k]));
-        _mm_store_si128(reinterpret_cast<__m128i*>(eb[k]), edx[k]);
+        const __m256i px =
+            _mm256_mul_epi32(_mm256_cvtepi32_epi64(e.dx[k]), _mm256_cvtepi32_epi64(_mm_sub_epi32(half, y[k])));
+        const __m256i qx =
+            _mm256_mul_epi32(_mm256_cvtepi32_epi64(e.dy[k]), _mm256_cvtepi32_epi64(_mm_sub_epi32(half, x[k])));
+        const __m256i c = _mm256_sub_epi64(_mm256_sub_epi64(px, qx), _mm256_cvtepi32_epi64(e.exclusive[k]));
+        _mm_store_si128(reinterpret_cast<__m128i*>(ea[k]), _mm_sub_epi32(zero, e.dy[k]));
+        _mm_store_si128(reinterpret_cast<__m128i*>(eb[k]), e.dx[k]);
         _mm256_store_si256(reinterpret_cast<__m256i*>(ec[k]), floorShift4(c, s, rest));
     }
     alignas(32) double gx[4], gy[4];
-    _mm256_store_pd(gx, dzdx);
-    _mm256_store_pd(gy, dzdy);
+    _mm256_store_pd(gx, p.dzdx);
+    _mm256_store_pd(gy, p.dzdy);
     for (int l = 0; l < 4; ++l) {
         if (formed >> l & 1) continue;
-        EdgeTri& e = *out[l];
-        if (!(planeOk >> l & 1)) {
-            setupInsideLane(b, l, window, snapped, params, e);
+        EdgeTri& r = *out[l];
+        if (!(p.ok >> l & 1)) {
+            setupInsideLane(b, l, window, snapped, params, r);
             continue;
         }
         for (int k = 0; k < 3; ++k) {
-            e.c[k] = ec[k][l];
-            e.a[k] = ea[k][l];
-            e.b[k] = eb[k][l];
+            r.c[k] = ec[k][l];
+            r.a[k] = ea[k][l];
+            r.b[k] = eb[k][l];
         }
-        e.x0 = uint16_t(box[0][l]);
-        e.x1 = uint16_t(box[1][l]);
-        e.y0 = uint16_t(box[2][l]);
-        e.y1 = uint16_t(box[3][l]);
+        r.x0 = uint16_t(box[0][l]);
+        r.x1 = uint16_t(box[1][l]);
+        r.y0 = uint16_t(box[2][l]);
+        r.y1 = uint16_t(box[3][l]);
         const WinVertex& v0 = window[b.v[0][l]];
-        e.plane = DepthPlane{v0.x, v0.y, v0.z, gx[l], gy[l]};
+        r.plane = DepthPlane{v0.x, v0.y, v0.z, gx[l], gy[l]};
     }
+}
+
+__attribute__((target("avx2"))) bool setupSmallGroup8(const Triangle* tris, const WinVertex* window,
+                                                      const SnapVertex* snapped, const SetupParams& params,
+                                                      const SmallOut& small, SmallGroup& got) {
+    const SnapLanes8 g = snapLanes8(tris, snapped, params);
+    // One-record lanes must be small: a pixel box of at most 2 x 2 and a snapped extent under
+    // three pixels on both axes (smallForms4's 32-bit sums).
+    const int S = params.subpixelBits;
+    const __m256i two = _mm256_set1_epi32(2), three = _mm256_set1_epi32(3 << S);
+    const __m256i small8 =
+        _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(two, _mm256_sub_epi32(g.hix, g.lox)),
+                                          _mm256_cmpgt_epi32(two, _mm256_sub_epi32(g.hiy, g.loy))),
+                         _mm256_and_si256(_mm256_cmpgt_epi32(three, _mm256_sub_epi32(g.maxx, g.minx)),
+                                          _mm256_cmpgt_epi32(three, _mm256_sub_epi32(g.maxy, g.miny))));
+    const int one = laneBits8(g.one);
+    if (laneBits8(g.inside) != 0xFF || (one & ~laneBits8(small8)) != 0) return false;
+    // The others have no record; their flags as countHints gives them.
+    const int rejected = laneBits8(g.rejected) & ~one;
+    got.rejected = uint32_t(std::popcount(unsigned(rejected)));
+    got.zeroArea = uint32_t(std::popcount(unsigned(laneBits8(g.flat) & ~one & ~rejected)));
+    got.forms = 0;
+    const __m128i s = _mm_cvtsi32_si128(S), half = _mm_set1_epi32(1 << (S - 1));
+    for (int h = 0; h < 2; ++h) {
+        const int write = one >> (4 * h) & 15;
+        if (write == 0) continue;
+        const __m128i sx[3] = {lanesOf(g.x[0], h), lanesOf(g.x[1], h), lanesOf(g.x[2], h)};
+        const __m128i sy[3] = {lanesOf(g.y[0], h), lanesOf(g.y[1], h), lanesOf(g.y[2], h)};
+        const Edges4 e = edges4(sx, sy, lanesOf(g.cw, h), params.fillRule);
+        uint32_t v[3][4];
+        for (int k = 0; k < 3; ++k)
+            for (int l = 0; l < 4; ++l) v[k][l] = tris[4 * h + l][k];
+        const Plane4 p = plane4(v, window);
+        if ((write & ~p.ok) != 0) return false;  // planeFrom's fallback: the scalar step's
+        const SmallOut out{small.out + got.forms, small.stride, small.bits, small.isFloat};
+        smallForms4(lanesOf(g.lox, h), lanesOf(g.hix, h), lanesOf(g.loy, h), lanesOf(g.hiy, h), e.x, e.y, e.dx, e.dy,
+                    e.exclusive, s, half, p.x0, p.y0, p.z0, p.dzdx, p.dzdy, p.ok, write, out);
+        got.forms += uint32_t(std::popcount(unsigned(write)));
+    }
+    return true;
 }
 
 #else
@@ -509,6 +591,12 @@ bool haveSetupAvx2() {
 void setupInsideEdgeTri4(const InsideBatch&, const WinVertex*, const SnapVertex*, const SetupParams&, EdgeTri* const[4],
                          const SmallOut*) {
     CULLIDE_CHECK(false, "setupInsideEdgeTri4 without AVX2");
+}
+
+bool setupSmallGroup8(const Triangle*, const WinVertex*, const SnapVertex*, const SetupParams&, const SmallOut&,
+                      SmallGroup&) {
+    CULLIDE_CHECK(false, "setupSmallGroup8 without AVX2");
+    return false;
 }
 
 #endif

@@ -2,6 +2,7 @@
 // plane (rules 2, 3 and 6 of cullide/raster/rules.h). Private to raster/.
 #pragma once
 
+#include "cullide/mesh.h"
 #include "cullide/raster/rules.h"
 
 #include <cstddef>
@@ -160,5 +161,21 @@ struct SmallOut {
 // scalar step, or with a larger box, gets kNotSmall and its record.
 void setupInsideEdgeTri4(const InsideBatch& batch, const WinVertex* window, const SnapVertex* snapped,
                          const SetupParams& params, EdgeTri* const out[4], const SmallOut* small = nullptr);
+
+// What setupSmallGroup8 found in its eight triangles: the forms it wrote, and the triangles
+// without a record that setupTriangle flags rejected or zero-area.
+struct SmallGroup {
+    uint32_t forms, rejected, zeroArea;
+};
+
+// The count and the four-wide setup fused for the direct path's common case, eight triangles
+// tris[0..8) at once with AVX2 (haveSetupAvx2()): when none needs clipping and each is either a
+// one-record triangle whose record would get a small form (setupInsideEdgeTri4 with `small`, its
+// plane from its vertices) or a triangle without a record (countHints's verdicts), writes the
+// small forms of the one-record triangles in triangle order to small.out[0..forms) and returns
+// true. Otherwise returns false, `got` unspecified; small.out[0..8) may have been written either
+// way.
+bool setupSmallGroup8(const Triangle* tris, const WinVertex* window, const SnapVertex* snapped,
+                      const SetupParams& params, const SmallOut& small, SmallGroup& got);
 
 }  // namespace cullide::raster::detail
