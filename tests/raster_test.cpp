@@ -973,6 +973,16 @@ Outcome run(const RandomScene& s, const OrthoView& view, CpuBackendOptions o, in
     return out;
 }
 
+// The scalar reference path's options for a seeded test: the fill rule by the seed's parity (the
+// seeds cover both), `subpixelBits` as given.
+CpuBackendOptions scalarReference(uint64_t seed, int subpixelBits) {
+    CpuBackendOptions o;
+    o.scalarReference = true;
+    o.fillRule = seed % 2 ? FillRule::BottomLeft : FillRule::TopLeft;
+    o.subpixelBits = subpixelBits;
+    return o;
+}
+
 void expectSame(const Outcome& a, const Outcome& b, const std::string& what) {
     EXPECT_EQ(a.results, b.results) << what;
     EXPECT_EQ(a.stats, b.stats) << what;
@@ -1013,10 +1023,7 @@ TEST(Differential, FastPathEqualsScalarReferenceOnRandomScenes) {
         const int W = 1 + int(pick() % 70), H = 1 + int(pick() % 70);
         const RandomScene s = randomScene(seed, W, H, 150, 120);
         OrthoView view = windowView(W, H, formats[seed % 6]);
-        CpuBackendOptions ref;
-        ref.scalarReference = true;
-        ref.fillRule = seed % 2 ? FillRule::BottomLeft : FillRule::TopLeft;
-        ref.subpixelBits = seed % 3 == 0 ? 4 : seed % 5 == 0 ? 12 : 8;
+        const CpuBackendOptions ref = scalarReference(seed, seed % 3 == 0 ? 4 : seed % 5 == 0 ? 12 : 8);
         const Outcome expected = run(s, view, ref, 2);
         EXPECT_GT(expected.stats.fragments, 0u);
         for (int tile : {8, 24, 64})
@@ -1298,10 +1305,7 @@ TEST(Differential, DirectPathEqualsScalarReferenceAndTiles) {
             if (query) s.list.endQuery();
         }
         const OrthoView view = windowView(W, H, formats[seed % 6]);
-        CpuBackendOptions ref;
-        ref.scalarReference = true;
-        ref.fillRule = seed % 2 ? FillRule::BottomLeft : FillRule::TopLeft;
-        ref.subpixelBits = seed % 3 == 0 ? 4 : 8;
+        const CpuBackendOptions ref = scalarReference(seed, seed % 3 == 0 ? 4 : 8);
         const Outcome expected = run(s, view, ref, 2);
         EXPECT_GT(expected.stats.fragments, 0u);
         EXPECT_GT(expected.stats.clipped, 0u);
@@ -1393,10 +1397,8 @@ TEST(Differential, DirectPathSmallTrianglesWithoutAVertexPlane) {
         collinearOnly.list.clear();
         collinearOnly.list.draw(0, nc);
         const OrthoView view = windowView(16, 16, formats[seed % 3]);
-        CpuBackendOptions ref;
-        ref.scalarReference = true;
-        ref.fillRule = seed % 2 ? FillRule::BottomLeft : FillRule::TopLeft;
-        ref.subpixelBits = 1 + int(seed % 2);  // coarse: snapping moves a vertex by up to 1/4 or 1/8 pixel
+        // Coarse: snapping moves a vertex by up to 1/4 or 1/8 pixel.
+        const CpuBackendOptions ref = scalarReference(seed, 1 + int(seed % 2));
         // The trap is armed: collinear triangles that snap to a non-zero area and cover a centre.
         EXPECT_GT(run(collinearOnly, view, ref).stats.fragments, 10u) << "seed " << seed;
         expectDirectOnThreads(s, view, ref, run(s, view, ref),
@@ -1444,10 +1446,7 @@ TEST(Differential, DirectPathLongTrianglesWithSmallBoxes) {
         longOnly.list.clear();
         longOnly.list.draw(0, uint32_t(longOnly.geo.triangles.size()));
         const OrthoView view = windowView(16, 16, seed % 2 ? DepthFormat::float32() : DepthFormat::unorm(24));
-        CpuBackendOptions ref;
-        ref.scalarReference = true;
-        ref.fillRule = seed % 2 ? FillRule::BottomLeft : FillRule::TopLeft;
-        ref.subpixelBits = seed < 2 ? 8 : 12;
+        const CpuBackendOptions ref = scalarReference(seed, seed < 2 ? 8 : 12);
         // Armed: the long triangles cover centres, unclipped (inside the guard band).
         const Outcome longs = run(longOnly, view, ref);
         EXPECT_GT(longs.stats.fragments, 50u) << "seed " << seed;
@@ -1513,10 +1512,7 @@ TEST(Differential, DirectPathGroupsOfEight) {
         s.list.depthFunc(DepthFunc::LEqual);
         s.list.draw(n / 2, n - n / 2);
         const OrthoView view = windowView(16, 16, formats[seed % 3]);
-        CpuBackendOptions ref;
-        ref.scalarReference = true;
-        ref.fillRule = seed % 2 ? FillRule::BottomLeft : FillRule::TopLeft;
-        ref.subpixelBits = seed < 3 ? 8 : 2;
+        const CpuBackendOptions ref = scalarReference(seed, seed < 3 ? 8 : 2);
         const Outcome expected = run(s, view, ref);
         // Armed: fragments, rejected and zero-area triangles; clipped ones where the groups stop often.
         EXPECT_GT(expected.stats.fragments, 2000u) << "seed " << seed;
