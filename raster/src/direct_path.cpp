@@ -71,9 +71,10 @@ struct Direct {
         params.dropEmpty = true;  // as setupDrawn
     }
 
-    // Counts and sets up triangles [b.lo, b.hi): the records of the one-record triangles, set up
-    // four at a time as setupDrawn does, with their small forms; the clipped ones noted, the
-    // others' flags counted. Reads only the geometry: blocks may be prepared in parallel.
+    // Counts and sets up triangles [b.lo, b.hi): the one-record triangles' small forms (or
+    // records), eight at a time while the groups allow (setupSmallGroup8), then four at a time as
+    // setupDrawn does; the clipped ones noted, the others' flags counted. Reads only the geometry:
+    // blocks may be prepared in parallel.
     void prepareBlock(Block& b) const {
         const SetupInput& g = in;
         uint32_t t = b.lo, n = 0;
