@@ -106,7 +106,7 @@ bool orient2dCertainlyNonZero(const Vec3d& p, const Vec3d& q, const Vec3d& r, in
     const double l = (q[i] - p[i]) * (r[j] - p[j]);
     const double rr = (q[j] - p[j]) * (r[i] - p[i]);
     const double det = l - rr;
-    return std::abs(det) > kOrient2dErrBound * (std::abs(l) + std::abs(rr));
+    return orient2dFilterNonZero(det, std::abs(l) + std::abs(rr));
 }
 
 // Coplanar points, exactly: an axis pair (i, j) on which the non-degenerate triangle t projects

@@ -15,7 +15,6 @@
 #include "cullide/mesh.h"
 #include "cullide/predicates.h"
 
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -42,8 +41,8 @@ Plane planeOf(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2);
 // orient2d's determinant and permanent on the axis pairs (1, 2), (2, 0) and (0, 1), evaluated as
 // collinear() evaluates them, so this is collinear()'s own filter. False: ask collinear().
 inline bool certainlyNotCollinear(const Plane& p) {
-    return (std::abs(p.n[0]) > kOrient2dErrBound * p.perm[0]) | (std::abs(p.n[1]) > kOrient2dErrBound * p.perm[1]) |
-        (std::abs(p.n[2]) > kOrient2dErrBound * p.perm[2]);
+    return orient2dFilterNonZero(p.n[0], p.perm[0]) | orient2dFilterNonZero(p.n[1], p.perm[1]) |
+        orient2dFilterNonZero(p.n[2], p.perm[2]);
 }
 
 // Objects of more triangles than this have their primitive records in Morton order of their

@@ -294,13 +294,29 @@ __attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s,
     return _mm256_or_si256(_mm256_srl_epi64(v, s), _mm256_sll_epi64(negative, rest));
 }
 
+// The lanes small enough for a small form: a pixel box [i0, i1] x [j0, j1] of at most 2 x 2
+// and a snapped extent (min to max, in fixed point with S = `s` bits) under three pixels on both
+// axes, which smallForms4's 32-bit edge sums need (below).
+__attribute__((target("avx2"), always_inline)) inline int smallLanes4(__m128i i0, __m128i i1, __m128i j0, __m128i j1,
+                                                                      __m128i minx, __m128i maxx, __m128i miny,
+                                                                      __m128i maxy, __m128i s) {
+    static_assert(kMaxSubpixelBits <= 12, "smallForms4's 32-bit edge sums");
+    const __m128i two = _mm_set1_epi32(2);
+    const __m128i three = _mm_sll_epi32(_mm_set1_epi32(3), s);  // three pixels in fixed point
+    const __m128i narrow = _mm_and_si128(_mm_cmpgt_epi32(three, _mm_sub_epi32(maxx, minx)),
+                                         _mm_cmpgt_epi32(three, _mm_sub_epi32(maxy, miny)));
+    const __m128i fitsBox =
+        _mm_and_si128(_mm_cmpgt_epi32(two, _mm_sub_epi32(i1, i0)), _mm_cmpgt_epi32(two, _mm_sub_epi32(j1, j0)));
+    return _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(fitsBox, narrow)));
+}
+
 // The small forms (SmallFrags) of four lanes set up in registers (setupInsideEdgeTri4,
 // setupSmallGroup8): per pixel of the 2 x 2 block at (i0, j0), whether the record's edge functions
 // are all >= 0 there, and the depth (z0 + dzdy*((j + 0.5) - y0)) + dzdx*((i + 0.5) - x0),
 // DepthPlane's operations in its order, so the same fragments and codes as the pixel loops.
-// `planeOk`: the lanes whose plane is these registers' (the others were set up by the scalar
-// step). The lanes in `write` are stored to small.out[0..), in order (setupInsideEdgeTri4: all
-// four, to out[l]). Returns the lanes given a form (the others get kNotSmall).
+// `smallLanes`: the lanes to form, small (smallLanes4) and with their plane in these registers (the
+// others are set up by the scalar step). The lanes in `write` are stored to small.out[0..), in
+// order (setupInsideEdgeTri4: all four, to out[l]); those not in `smallLanes` get kNotSmall.
 //
 // The edge tests in 32 bits, from the block's corner: the record's E(i, j) = floor(c'(i, j) / 2^S)
 // is >= 0 iff c'(i, j) >= 0, where c'(i, j) = 2^S*(a*i + b*j) + c' is the snapped edge function at
@@ -315,20 +331,9 @@ __attribute__((target("avx2"))) inline __m256i floorShift4(__m256i v, __m128i s,
 __attribute__((target("avx2"), always_inline)) inline int smallForms4(
     __m128i i0, __m128i i1, __m128i j0, __m128i j1, const __m128i x[3], const __m128i y[3], const __m128i dx[3],
     const __m128i dy[3], const __m128i exclusive[3], __m128i s, __m128i half, __m256d x0, __m256d y0, __m256d z0,
-    __m256d dzdx, __m256d dzdy, int planeOk, int write, const SmallOut& small) {
-    static_assert(kMaxSubpixelBits <= 12, "smallForms4's 32-bit edge sums");
-    const __m128i one = _mm_set1_epi32(1), two = _mm_set1_epi32(2);
+    __m256d dzdx, __m256d dzdy, int smallLanes, int write, const SmallOut& small) {
+    const __m128i one = _mm_set1_epi32(1);
     const __m128i w = _mm_sub_epi32(i1, i0), h = _mm_sub_epi32(j1, j0);  // >= 0: the box holds a centre
-    const __m128i minx = _mm_min_epi32(_mm_min_epi32(x[0], x[1]), x[2]);
-    const __m128i maxx = _mm_max_epi32(_mm_max_epi32(x[0], x[1]), x[2]);
-    const __m128i miny = _mm_min_epi32(_mm_min_epi32(y[0], y[1]), y[2]);
-    const __m128i maxy = _mm_max_epi32(_mm_max_epi32(y[0], y[1]), y[2]);
-    const __m128i three = _mm_sll_epi32(_mm_set1_epi32(3), s);  // three pixels in fixed point
-    const __m128i narrow = _mm_and_si128(_mm_cmpgt_epi32(three, _mm_sub_epi32(maxx, minx)),
-                                         _mm_cmpgt_epi32(three, _mm_sub_epi32(maxy, miny)));
-    const __m128i fitsBox = _mm_and_si128(_mm_cmpgt_epi32(two, w), _mm_cmpgt_epi32(two, h));
-    const int fits = _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(fitsBox, narrow)));
-    const int smallLanes = fits & planeOk;
     SmallFrags* const out = small.out;
     if (smallLanes == 0) {
         for (int l = 0, c = 0; l < 4; ++l)
@@ -495,9 +500,10 @@ __attribute__((target("avx2"))) void setupInsideEdgeTri4(const InsideBatch& b, c
     const __m128i j1 = _mm_min_epi32(_mm_sra_epi32(_mm_sub_epi32(maxy, half), s), _mm_set1_epi32(params.height - 1));
     const Plane4 p = plane4(b.v, window);
     // The lanes with a small form need no record (the direct path reads only the others').
-    const int formed = small ? smallForms4(i0, i1, j0, j1, x, y, e.dx, e.dy, e.exclusive, s, half, p.x0, p.y0, p.z0,
-                                           p.dzdx, p.dzdy, p.ok, 15, *small)
-                             : 0;
+    const int formed = small
+        ? smallForms4(i0, i1, j0, j1, x, y, e.dx, e.dy, e.exclusive, s, half, p.x0, p.y0, p.z0, p.dzdx, p.dzdy,
+                      smallLanes4(i0, i1, j0, j1, minx, maxx, miny, maxy, s) & p.ok, 15, *small)
+        : 0;
     if (formed == 15) return;
     // The records of the other lanes: the box, and the edges' constants in 64 bits
     // (_mm256_mul_epi32 multiplies the low 32 bits of each lane, signed: every factor fits them).
@@ -546,37 +552,35 @@ __attribute__((target("avx2"))) bool setupSmallGroup8(const Triangle* tris, cons
                                                       const SnapVertex* snapped, const SetupParams& params,
                                                       const SmallOut& small, SmallGroup& got) {
     const SnapLanes8 g = snapLanes8(tris, snapped, params);
-    // One-record lanes must be small: a pixel box of at most 2 x 2 and a snapped extent under
-    // three pixels on both axes (smallForms4's 32-bit sums).
-    const int S = params.subpixelBits;
-    const __m256i two = _mm256_set1_epi32(2), three = _mm256_set1_epi32(3 << S);
-    const __m256i small8 =
-        _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(two, _mm256_sub_epi32(g.hix, g.lox)),
-                                          _mm256_cmpgt_epi32(two, _mm256_sub_epi32(g.hiy, g.loy))),
-                         _mm256_and_si256(_mm256_cmpgt_epi32(three, _mm256_sub_epi32(g.maxx, g.minx)),
-                                          _mm256_cmpgt_epi32(three, _mm256_sub_epi32(g.maxy, g.miny))));
     const int one = laneBits8(g.one);
-    if (laneBits8(g.inside) != 0xFF || (one & ~laneBits8(small8)) != 0) return false;
+    if (laneBits8(g.inside) != 0xFF) return false;  // clipping: the count pass and setupTriangle's
     // The others have no record; their flags as countHints gives them.
     const int rejected = laneBits8(g.rejected) & ~one;
     got.rejected = uint32_t(std::popcount(unsigned(rejected)));
     got.zeroArea = uint32_t(std::popcount(unsigned(laneBits8(g.flat) & ~one & ~rejected)));
     got.forms = 0;
+    const int S = params.subpixelBits;
     const __m128i s = _mm_cvtsi32_si128(S), half = _mm_set1_epi32(1 << (S - 1));
     for (int h = 0; h < 2; ++h) {
         const int write = one >> (4 * h) & 15;
         if (write == 0) continue;
-        const __m128i sx[3] = {lanesOf(g.x[0], h), lanesOf(g.x[1], h), lanesOf(g.x[2], h)};
-        const __m128i sy[3] = {lanesOf(g.y[0], h), lanesOf(g.y[1], h), lanesOf(g.y[2], h)};
-        const Edges4 e = edges4(sx, sy, lanesOf(g.cw, h), params.fillRule);
+        const __m128i i0 = lanesOf(g.lox, h), i1 = lanesOf(g.hix, h), j0 = lanesOf(g.loy, h), j1 = lanesOf(g.hiy, h);
+        // A larger one-record lane: the four-wide setup's record and pixel loop.
+        if ((write &
+             ~smallLanes4(i0, i1, j0, j1, lanesOf(g.minx, h), lanesOf(g.maxx, h), lanesOf(g.miny, h),
+                          lanesOf(g.maxy, h), s)) != 0)
+            return false;
         uint32_t v[3][4];
         for (int k = 0; k < 3; ++k)
             for (int l = 0; l < 4; ++l) v[k][l] = tris[4 * h + l][k];
         const Plane4 p = plane4(v, window);
         if ((write & ~p.ok) != 0) return false;  // planeFrom's fallback: the scalar step's
+        const __m128i sx[3] = {lanesOf(g.x[0], h), lanesOf(g.x[1], h), lanesOf(g.x[2], h)};
+        const __m128i sy[3] = {lanesOf(g.y[0], h), lanesOf(g.y[1], h), lanesOf(g.y[2], h)};
+        const Edges4 e = edges4(sx, sy, lanesOf(g.cw, h), params.fillRule);
         const SmallOut out{small.out + got.forms, small.stride, small.bits, small.isFloat};
-        smallForms4(lanesOf(g.lox, h), lanesOf(g.hix, h), lanesOf(g.loy, h), lanesOf(g.hiy, h), e.x, e.y, e.dx, e.dy,
-                    e.exclusive, s, half, p.x0, p.y0, p.z0, p.dzdx, p.dzdy, p.ok, write, out);
+        smallForms4(i0, i1, j0, j1, e.x, e.y, e.dx, e.dy, e.exclusive, s, half, p.x0, p.y0, p.z0, p.dzdx, p.dzdy, write,
+                    write, out);
         got.forms += uint32_t(std::popcount(unsigned(write)));
     }
     return true;

@@ -30,6 +30,7 @@
 #include <algorithm>
 #include <bit>
 #include <climits>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -42,6 +43,11 @@ inline constexpr double kOrient3dErrBound = (7.0 + 56.0 * 0x1p-53) * 0x1p-53;
 // The same for orient2d, (3 + 16 eps) eps: (q_i - p_i)(r_j - p_j) - (q_j - p_j)(r_i - p_i)
 // evaluated in that order, against the sum of the two products' magnitudes.
 inline constexpr double kOrient2dErrBound = (3.0 + 16.0 * 0x1p-53) * 0x1p-53;
+// orient2d's filter: a determinant so evaluated, whose magnitude exceeds kOrient2dErrBound times
+// its permanent (the two products' magnitudes summed), is certainly not zero.
+inline bool orient2dFilterNonZero(double det, double permanent) {
+    return std::abs(det) > kOrient2dErrBound * permanent;
+}
 
 // Sign (+1, 0, -1) of det[q - p, r - p, s - p]: +1 when s is on the positive side of the plane
 // through p, q, r oriented counterclockwise (CGAL::orientation's convention).
