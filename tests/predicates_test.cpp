@@ -1,4 +1,4 @@
-// Tests for core/src/predicates.cpp: the filtered orient3d against CGAL's exact predicate, the
+// Tests for core/src/predicates.cpp: the filtered orient3d and orient2d against CGAL's exact predicates, the
 // triangle-triangle contact and its class against an exact-construction reference (Epeck), and
 // the exact integer unit of float coordinates.
 #include "cullide/predicates.h"
@@ -82,6 +82,44 @@ TEST(Predicates, CollinearIsExact) {
     EXPECT_TRUE(collinear(v(0x1p-140, 0, 0), v(0x1p-139, 0, 0), v(0x1p-138, 0, 0)));
     EXPECT_FALSE(collinear(v(0x1p-140, 0, 0), v(0x1p-139, 0, 0), v(0x1p-138, 0x1p-149, 0)));
     EXPECT_TRUE(collinear(v(0x1p59, 0x1p59, 0), v(-0x1p59, -0x1p59, 0), v(0, 0, 0)));
+}
+
+// Trap: orient2d on an axis pair (the oracle's fan turns): a float sign for points that are
+// exactly collinear in the projection or a few ulps off it, the axes taken in the wrong order,
+// and the three paths (filter, integers, CGAL for magnitudes the integers cannot hold). Points on
+// the line x + y = 1 of the projection (exactly, in binary), nudged by one ulp in every other
+// trial, each projection of the three axis pairs, against CGAL's exact orientation; then the
+// sign of a counterclockwise triangle per axis pair, and magnitudes from 2^-140 to 2^59.
+TEST(Predicates, Orient2dMatchesExactOnNearlyCollinearPoints) {
+    std::mt19937_64 rng(9);
+    std::uniform_int_distribution<int> coord(-1 << 20, 1 << 20);
+    int zeros = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        const int i = trial % 3, j = (i + 1) % 3, k = (i + 2) % 3;
+        Vec3d p[3];
+        for (Vec3d& q : p) {
+            const double x = std::ldexp(double(coord(rng)), -20);
+            q[i] = x, q[j] = 1 - x, q[k] = double(coord(rng));  // exact: small dyadic numbers
+        }
+        if (trial % 2) p[2][j] = std::nextafter(p[2][j], trial % 4 == 1 ? 10.0 : -10.0);
+        using P2 = EK::Point_2;
+        const auto e = CGAL::orientation(P2(p[0][i], p[0][j]), P2(p[1][i], p[1][j]), P2(p[2][i], p[2][j]));
+        const int expected = e == CGAL::POSITIVE ? 1 : e == CGAL::NEGATIVE ? -1 : 0;
+        ASSERT_EQ(orient2d(p[0], p[1], p[2], i, j), expected) << "trial " << trial;
+        ASSERT_EQ(orient2d(p[0], p[1], p[2], j, i), -expected) << "trial " << trial;
+        zeros += expected == 0;
+    }
+    EXPECT_GT(zeros, 5000);  // the collinear half really was collinear
+    // Counterclockwise in (x, y), (y, z) and (z, x): the signs of the normal's z, x and y.
+    const Vec3d a = v(0, 0, 0), b = v(1, 0, 0), c = v(0, 1, 0), d = v(0, 0, 1);
+    EXPECT_EQ(orient2d(a, b, c, 0, 1), 1);
+    EXPECT_EQ(orient2d(a, c, d, 1, 2), 1);
+    EXPECT_EQ(orient2d(a, d, b, 2, 0), 1);
+    EXPECT_EQ(orient2d(a, c, b, 0, 1), -1);
+    EXPECT_EQ(orient2d(v(0x1p-140, 0, 5), v(0x1p-139, 0, 6), v(0x1p-138, 0x1p-149, 7), 0, 1), 1);
+    EXPECT_EQ(orient2d(v(0x1p-140, 0, 5), v(0x1p-139, 0, 6), v(0x1p-138, 0, 7), 0, 1), 0);
+    EXPECT_EQ(orient2d(v(0x1p59, 0x1p59, 0), v(-0x1p59, -0x1p59, 1), v(1, 1, 2), 0, 1), 0);
+    EXPECT_EQ(orient2d(v(0x1p59, 0x1p59, 0), v(-0x1p59, -0x1p59, 1), v(0x1p-20, 0, 2), 0, 1), 1);  // 2^40
 }
 
 // Trap: the degenerate configurations of Guigue-Devillers (corners on the other plane, shared

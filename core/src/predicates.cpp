@@ -72,31 +72,6 @@ bool orient3dFromFloats(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Ve
     return true;
 }
 
-// Sign of the 2D orientation of p, q, r projected on axes (i, j), exactly: float filter, then
-// integers (differences below 2^62 bits... checked: below 2^61), then CGAL.
-int orient2d(const Vec3d& p, const Vec3d& q, const Vec3d& r, int i, int j) {
-    const double l = (q[i] - p[i]) * (r[j] - p[j]);
-    const double rr = (q[j] - p[j]) * (r[i] - p[i]);
-    const double det = l - rr;
-    const double bound = kOrient2dErrBound * (std::abs(l) + std::abs(rr));
-    if (det > bound) return 1;
-    if (-det > bound) return -1;
-    const double x[6] = {p[i], p[j], q[i], q[j], r[i], r[j]};
-    int64_t c[6];
-    if (toIntegers(x, 6, c)) {
-        const int64_t a = c[2] - c[0], b = c[3] - c[1], e = c[4] - c[0], f = c[5] - c[1];  // |.| < 2^63
-        constexpr int64_t kLimit = int64_t(1) << 62;
-        if (a < kLimit && a > -kLimit && b < kLimit && b > -kLimit && e < kLimit && e > -kLimit && f < kLimit &&
-            f > -kLimit) {
-            const __int128 d = __int128(a) * f - __int128(b) * e;  // |.| < 2^125
-            return d > 0 ? 1 : d < 0 ? -1 : 0;
-        }
-    }
-    using P2 = Kernel::Point_2;
-    const CGAL::Orientation o = CGAL::orientation(P2(p[i], p[j]), P2(q[i], q[j]), P2(r[i], r[j]));
-    return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0;
-}
-
 int sign(CGAL::Orientation o) {
     return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0;
 }
@@ -211,6 +186,30 @@ bool straddles(int d0, int d1, int d2) {
 }
 
 }  // namespace
+
+// The float filter, then integers (differences below 2^62), then CGAL.
+int orient2d(const Vec3d& p, const Vec3d& q, const Vec3d& r, int i, int j) {
+    const double l = (q[i] - p[i]) * (r[j] - p[j]);
+    const double rr = (q[j] - p[j]) * (r[i] - p[i]);
+    const double det = l - rr;
+    const double bound = kOrient2dErrBound * (std::abs(l) + std::abs(rr));
+    if (det > bound) return 1;
+    if (-det > bound) return -1;
+    const double x[6] = {p[i], p[j], q[i], q[j], r[i], r[j]};
+    int64_t c[6];
+    if (toIntegers(x, 6, c)) {
+        const int64_t a = c[2] - c[0], b = c[3] - c[1], e = c[4] - c[0], f = c[5] - c[1];  // |.| < 2^63
+        constexpr int64_t kLimit = int64_t(1) << 62;
+        if (a < kLimit && a > -kLimit && b < kLimit && b > -kLimit && e < kLimit && e > -kLimit && f < kLimit &&
+            f > -kLimit) {
+            const __int128 d = __int128(a) * f - __int128(b) * e;  // |.| < 2^125
+            return d > 0 ? 1 : d < 0 ? -1 : 0;
+        }
+    }
+    using P2 = Kernel::Point_2;
+    const CGAL::Orientation o = CGAL::orientation(P2(p[i], p[j]), P2(q[i], q[j]), P2(r[i], r[j]));
+    return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0;
+}
 
 // CGAL's coplanar_orientation: the first axis-plane projection (in its order) in which p q r do
 // not degenerate.

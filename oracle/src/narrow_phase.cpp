@@ -6,6 +6,8 @@
 // every product and sum is rounded on its own, never fused.
 #include "narrow_phase.h"
 
+#include "cullide/parallel.h"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -143,6 +145,116 @@ Plane planeOf(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2) {
     return pl;
 }
 
+uint8_t projectedTurnsExact(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Plane& plane) {
+    uint8_t turns = 0;
+    for (int k = 0; k < 3; ++k) {
+        int sign;
+        if (orient2dFilterNonZero(plane.n[k], plane.perm[k])) sign = plane.n[k] > 0 ? 1 : -1;
+        else sign = orient2d(p0.cast<double>(), p1.cast<double>(), p2.cast<double>(), (k + 1) % 3, (k + 2) % 3);
+        turns |= uint8_t(sign > 0) << k | uint8_t(sign < 0) << (3 + k);
+    }
+    return turns;
+}
+
+// Bit i set when from[i] == id, for i below size (at most 32); from[] readable to a multiple of 4.
+inline uint32_t matches(const uint32_t* from, uint32_t size, uint32_t id) {
+    uint32_t bits = 0;
+#if defined(__SSE2__)
+    const __m128i key = _mm_set1_epi32(int(id));
+    for (uint32_t i = 0; i < size; i += 4) {
+        const __m128i same = _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(from + i)), key);
+        bits |= uint32_t(_mm_movemask_ps(_mm_castsi128_ps(same))) << i;
+    }
+#else
+    for (uint32_t i = 0; i < size; ++i) bits |= uint32_t(from[i] == id) << i;
+#endif
+    return size == 32 ? bits : bits & ((1u << size) - 1);
+}
+
+void certifyFans(std::span<Prim> prims, size_t vertexCount, PageArena* arena) {
+    const size_t n = prims.size();
+    // Per vertex, its fan's corners (record * 4 + corner: below 2^31) by a counting sort, and the turns every
+    // record of its fan has: 4 bytes per corner and 5 per vertex, in one array so that a large
+    // mesh's goes back to the system when freed (the arena keeps its chunks to the call's end:
+    // docs/oracle.md, "Fans").
+    Buffer<uint32_t> scratch{ArenaAllocator<uint32_t>(arena)};
+    scratch.resize(vertexCount + 1 + 3 * n + (vertexCount + 3) / 4);
+    uint32_t* const end = scratch.data();  // vertex v's corners end at end[v] (from end[v - 1], or 0)
+    uint32_t* const corners = end + vertexCount + 1;
+    uint8_t* const turns = reinterpret_cast<uint8_t*>(corners + 3 * n);
+    std::fill(end, end + vertexCount + 1, 0u);
+    std::fill(turns, turns + vertexCount, uint8_t(0x3f));
+    for (const Prim& prim : prims)
+        for (int c = 0; c < 3; ++c) ++end[prim.v[c] + 1], turns[prim.v[c]] &= prim.turns;
+    for (size_t v = 0; v < vertexCount; ++v) end[v + 1] += end[v];
+    for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) corners[end[prims[i].v[c]]++] = uint32_t(4 * i + size_t(c));
+    // Then per vertex whether its fan is certified: its records all turn one way along some axis
+    // k, where its outer edges (from the corner after the vertex to the one before, in each
+    // record's order) form closed paths that wind around its image exactly once. Fans of more
+    // than kMaxFan records are not (the closed-paths check is quadratic).
+    constexpr uint32_t kMaxFan = 32;
+    parallelFor(0, vertexCount, 1024, [&](const tbb::blocked_range<size_t>& r) {
+        uint32_t from[kMaxFan + 4], to[kMaxFan];  // ids; from[] readable to a multiple of 4
+        const float* fromAt[kMaxFan];  // the outer edges' corners
+        const float* toAt[kMaxFan];
+        for (size_t v = r.begin(); v != r.end(); ++v) {
+            const uint32_t first = v == 0 ? 0 : end[v - 1], size = end[v] - first;
+            uint8_t& certified = turns[v];  // turns[v] is not read again once this is written
+            const uint8_t same = turns[v];
+            certified = 0;
+            if (size < 3 || size > kMaxFan || same == 0) continue;
+            for (uint32_t j = 0; j < size; ++j) {
+                const uint32_t at = corners[first + j], c = at & 3;
+                const Prim& prim = prims[at >> 2];
+                const uint32_t next = c == 2 ? 0 : c + 1, prev = c == 0 ? 2 : c - 1;
+                from[j] = prim.v[next], to[j] = prim.v[prev];
+                fromAt[j] = prim.p[next], toAt[j] = prim.p[prev];
+            }
+            const float* const at = prims[corners[first] >> 2].p[corners[first] & 3];  // the vertex
+            // Along axis k (X, Y: the axes k + 1 and k + 2) where every record turns one way: how
+            // many of the fan's angles at the vertex's image hold the ray from it toward +X, each
+            // angle [from, to) half open. Counterclockwise, each angle is below pi and holds the
+            // ray iff from's Y <= the vertex's Y < to's Y; clockwise, mirrored. When the outer
+            // edges form closed paths, that count is their winding number around the vertex's
+            // image, at least one per path.
+            bool once = false;
+            for (int bit = 0; bit < 6 && !once; ++bit) {
+                if (!(same >> bit & 1)) continue;
+                const int y = bit % 3 == 0 ? 2 : bit % 3 - 1;
+                const float vy = at[y];
+                uint32_t winding = 0;
+                if (bit < 3)
+                    for (uint32_t j = 0; j < size; ++j) winding += (fromAt[j][y] <= vy) & (vy < toAt[j][y]);
+                else
+                    for (uint32_t j = 0; j < size; ++j) winding += (fromAt[j][y] >= vy) & (vy > toAt[j][y]);
+                once = winding == 1;
+            }
+            if (!once) continue;
+            // The outer edges form closed paths: each edge's end is exactly one edge's start (bit i
+            // of match: to[j] = from[i]), and no two end at the same start (the bits of all j
+            // together cover every edge). Then one path, winding once: the fan's images tile the
+            // plane around the vertex's image once.
+            for (uint32_t j = size; j < (size + 3) / 4 * 4; ++j) from[j] = ~0u;
+            uint32_t all = 0;
+            bool wrong = false;
+            for (uint32_t j = 0; j < size; ++j) {
+                const uint32_t match = matches(from, size, to[j]);
+                wrong |= match == 0 || (match & (match - 1)) != 0;
+                all |= match;
+            }
+            certified = !wrong && all == (size == 32 ? ~0u : (1u << size) - 1);
+        }
+    });
+    const uint8_t* const certified = turns;
+    parallelFor(0, n, 4096, [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            Prim& prim = prims[i];
+            prim.fans = uint8_t(certified[prim.v[0]] | certified[prim.v[1]] << 1 | certified[prim.v[2]] << 2);
+        }
+    });
+}
+
 namespace {
 
 // Which corners two triangles share: the first two shared corners (sa on a, sb on b; unused
@@ -178,6 +290,13 @@ inline uint32_t sharedMask(const Prim& a, const Prim& b) {
 inline int sharedCount(uint32_t mask) {
     const uint32_t rest = mask & (mask - 1);  // (std::popcount is a libgcc call on baseline x86-64)
     return int(mask != 0) + int(rest != 0) + int((rest & (rest - 1)) != 0);
+}
+
+// Whether a pair whose sharedMask is `mask` shares one or two corners, one of them a's corner whose
+// fan is certified (certifyFans): then they meet only at it, or only along the shared edge.
+inline bool fanDecides(const Prim& a, uint32_t mask, int count) {
+    const uint32_t certified = (a.fans & 1u) * 7 | (a.fans & 2u) * 28 | (a.fans & 4u) * 112;  // bits 3c..3c+2
+    return (mask & certified) != 0 && count < 3;
 }
 
 inline Sharing sharingOf(uint32_t mask) {
@@ -272,7 +391,9 @@ Contact sameCornersContact(const Prim& a, const Prim& b, bool sameMesh) {
 
 Contact primContact(const Prim& a, const Plane& planeA, const Prim& b, const Plane* storedB, bool sameMesh) {
     // b's plane is computed only past the first rejection.
-    const Sharing s = sharingOf(sameMesh ? sharedMask(a, b) : 0);
+    const uint32_t mask = sameMesh ? sharedMask(a, b) : 0;
+    const Sharing s = sharingOf(mask);
+    if (fanDecides(a, mask, s.count)) return Contact::None;
     if (s.count == 2) return edgeContact(a, planeA, b, s);
     if (s.count == 1) return vertexContact(a, planeA, b, storedB, s);
     if (s.count == 0) return apartContact(a, planeA, b, storedB);
@@ -286,7 +407,7 @@ uint32_t primContacts(const StoredPrims* objects, const Candidate* pairs, uint32
     // and one for that rejection, each without a data-dependent branch, took 3-7% off the
     // oracle's time (A/B, meshes of 5.8k-46k triangles; the classes alone, within noise).
     constexpr uint32_t kChunk = 256, kAhead = 8;
-    uint16_t index[5][kChunk];  // per class (4: not tested), the chunk's pairs
+    uint16_t index[6][kChunk];  // per class (4: not tested, 5: decided by a fan), the chunk's pairs
     uint16_t mask[kChunk];  // sharedMask per pair
     int8_t sign[kChunk][2];  // per vertex-class survivor, s1 and s2 of vertexContact
     uint32_t hitCount = 0;
@@ -298,7 +419,7 @@ uint32_t primContacts(const StoredPrims* objects, const Candidate* pairs, uint32
     for (uint32_t first = 0; first < count; first += kChunk) {
         const uint32_t n = std::min(kChunk, count - first);
         const Candidate* const chunk = pairs + first;
-        uint32_t size[5] = {0, 0, 0, 0, 0};
+        uint32_t size[6] = {0, 0, 0, 0, 0, 0};
         for (uint32_t k = 0; k < n; ++k) {
             // The second record of the pair kAhead on (and its plane) fetched ahead: random reads.
             if (k + kAhead < n) {
@@ -307,10 +428,10 @@ uint32_t primContacts(const StoredPrims* objects, const Candidate* pairs, uint32
                 __builtin_prefetch(&objects[f.object1].planes[f.prim1]);
             }
             const Candidate& c = chunk[k];
-            const uint32_t m = c.object0 == c.object1
-                ? sharedMask(objects[c.object0].prims[c.prim0], objects[c.object1].prims[c.prim1])
-                : 0;
-            const uint32_t cls = inTestOrder(c) ? uint32_t(sharedCount(m)) : 4;
+            const Prim& a = objects[c.object0].prims[c.prim0];
+            const uint32_t m = c.object0 == c.object1 ? sharedMask(a, objects[c.object1].prims[c.prim1]) : 0;
+            const int shared = sharedCount(m);
+            const uint32_t cls = !inTestOrder(c) ? 4 : fanDecides(a, m, shared) ? 5 : uint32_t(shared);
             mask[k] = uint16_t(m);
             index[cls][size[cls]++] = uint16_t(k);
         }

@@ -17,6 +17,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 
 namespace cullide::oracle::detail {
 
@@ -24,6 +25,12 @@ struct alignas(64) Prim {
     float p[3][3];  // world corners (float; exact in double)
     Triangle v;  // vertex ids for the sharing rules (welded when asked)
     uint32_t triangle;  // index in the object's mesh
+    // Bit k: the triangle projected along axis k (onto axes k + 1 and k + 2, mod 3) is
+    // counterclockwise, bit 3 + k: clockwise; neither: edge-on (exact; projectedTurns).
+    uint8_t turns;
+    // Bit c: corner c's fan is certified (certifyFans): every other triangle of the object that has
+    // this corner's vertex meets this one only there, or only along their shared edge.
+    uint8_t fans;
 };
 static_assert(sizeof(Prim) == 64);
 
@@ -44,6 +51,30 @@ inline bool certainlyNotCollinear(const Plane& p) {
     return orient2dFilterNonZero(p.n[0], p.perm[0]) | orient2dFilterNonZero(p.n[1], p.perm[1]) |
         orient2dFilterNonZero(p.n[2], p.perm[2]);
 }
+
+// Prim::turns of the triangle p0 p1 p2 whose planeOf is `plane`: the signs of its components
+// (orient2d's determinants on the axis pairs (1, 2), (2, 0), (0, 1)), by the filter, else exactly.
+uint8_t projectedTurnsExact(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Plane& plane);
+inline uint8_t projectedTurns(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Plane& plane) {
+    uint8_t turns = 0;
+    bool sure = true;
+    for (int k = 0; k < 3; ++k) {
+        sure &= orient2dFilterNonZero(plane.n[k], plane.perm[k]);
+        turns |= uint8_t(plane.n[k] > 0) << k | uint8_t(plane.n[k] < 0) << (3 + k);
+    }
+    return sure ? turns : projectedTurnsExact(p0, p1, p2, plane);
+}
+
+// Sets Prim::fans of one object's records (turns filled; vertex ids below vertexCount), with
+// scratch from `arena` (null: malloc). A vertex's fan is certified when the records that have it
+// (its fan) project along one axis to triangles of one turning sense whose outer edges form
+// closed paths around the vertex that together wind around it exactly once. Their images then
+// tile the plane around the vertex's image once: two triangles of the fan that share only the
+// vertex have images that meet only at its image, two that share an edge only along that edge's
+// image, and since each triangle projects one to one, the triangles meet only at the vertex, or
+// only along the edge (no contact by faceContact's rules). Exact: each turn from the filter or
+// orient2d, the winding from the records' corners compared as floats (docs/oracle.md, "Fans").
+void certifyFans(std::span<Prim> prims, size_t vertexCount, PageArena* arena);
 
 // Objects of more triangles than this have their primitive records in Morton order of their
 // first corner (cache locality of the narrow phase's reads); smaller ones keep the mesh's own

@@ -246,7 +246,7 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
     size_t allTriangles = 0;
     for (const Object& object : scene.objects) allTriangles += object.mesh.triangles.size();
     ctx.storedPlanes = allTriangles <= detail::storedPlanesMax;
-    std::vector<std::vector<char>> degenerate(scene.objects.size());
+    std::vector<char> degen;  // per object, in turn
     Buffer<uint32_t> kept(ArenaAllocator<uint32_t>(mem.arena));  // per object, in turn
     for (size_t o = 0; o < scene.objects.size(); ++o) {
         const Object& object = scene.objects[o];
@@ -282,7 +282,6 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
         ObjectData& d = ctx.objects[o];
         std::vector<uint32_t> vertexId;  // the vertex each index stands for in the sharing rules
         if (options.weldByPosition) vertexId = weldMap(positions);
-        std::vector<char>& degen = degenerate[o];
         degen.assign(n, 0);
         // The planes, whose products decide most triangles' degeneracy (collinear()'s filter), are
         // kept from this pass, per triangle, when they are stored and the primitives keep the
@@ -317,7 +316,6 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
             d.planes.resize(kept.size());
         }
         d.prims.resize(kept.size());
-        d.boxes.resize(kept.size());
         if (ctx.storedPlanes && !planesHere) d.planes.resize(kept.size());
         parallelFor(0, kept.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
             for (size_t i = r.begin(); i != r.end(); ++i) {
@@ -329,11 +327,34 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                     prim.v[k] = vertexId.empty() ? tri[k] : vertexId[tri[k]];
                 }
                 prim.triangle = t;
-                if (ctx.storedPlanes && !planesHere)
-                    d.planes[i] = detail::planeOf(positions[tri[0]], positions[tri[1]], positions[tri[2]]);
+                const Vec3f &p0 = positions[tri[0]], &p1 = positions[tri[1]], &p2 = positions[tri[2]];
+                if (ctx.storedPlanes && !planesHere) d.planes[i] = detail::planeOf(p0, p1, p2);
+                prim.turns =
+                    detail::projectedTurns(p0, p1, p2, ctx.storedPlanes ? d.planes[i] : detail::planeOf(p0, p1, p2));
+            }
+        });
+        truth.trianglesTested += d.prims.size();
+    }
+    // Freed (the allocators swap with the storage: each array goes back through its own).
+    Buffer<uint32_t>().swap(kept);
+    std::vector<char>().swap(degen);
+    if (!workspace) Buffer<Vec3f>().swap(mem.world);
+    if (truth.trianglesTested > (size_t(1) << 29))
+        throw InputError("scene",
+                         std::to_string(truth.trianglesTested) +
+                             " triangles to test: the oracle's broad phase takes at most 2^29 (536,870,912)");
+    // The fans, then the boxes from the records, once those arrays are gone: the fans' scratch (4
+    // bytes a corner) would otherwise be the call's peak (docs/oracle.md, "Fans").
+    for (size_t o = 0; o < scene.objects.size(); ++o) {
+        ObjectData& d = ctx.objects[o];
+        detail::certifyFans(d.prims, scene.objects[o].mesh.positions.size(), mem.arena);
+        d.boxes.resize(d.prims.size());
+        parallelFor(0, d.prims.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                const detail::Prim& prim = d.prims[i];
                 Box& b = d.boxes[i];
                 for (int k = 0; k < 3; ++k) {
-                    const float a = positions[tri[0]][k], bb = positions[tri[1]][k], c = positions[tri[2]][k];
+                    const float a = prim.p[0][k], bb = prim.p[1][k], c = prim.p[2][k];
                     // Float corners: the exact box is a float box; one ulp outward keeps boxes
                     // that only touch overlapping, whatever Embree's comparisons.
                     b.lo[k] = detail::roundDown(std::min({a, bb, c}));
@@ -341,15 +362,7 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                 }
             }
         });
-        truth.trianglesTested += d.prims.size();
     }
-    // Freed (the allocators swap with the storage: each array goes back through its own).
-    Buffer<uint32_t>().swap(kept);
-    if (!workspace) Buffer<Vec3f>().swap(mem.world);
-    if (truth.trianglesTested > (size_t(1) << 29))
-        throw InputError("scene",
-                         std::to_string(truth.trianglesTested) +
-                             " triangles to test: the oracle's broad phase takes at most 2^29 (536,870,912)");
     truth.setupSeconds = since(t0);
 
     if (ctx.storedPlanes)

@@ -53,6 +53,10 @@ inline bool orient2dFilterNonZero(double det, double permanent) {
 // through p, q, r oriented counterclockwise (CGAL::orientation's convention).
 int orient3d(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s);
 
+// Sign (+1, 0, -1) of the orientation of p, q, r projected on axes (i, j):
+// (q_i - p_i)(r_j - p_j) - (q_j - p_j)(r_i - p_i), exactly.
+int orient2d(const Vec3d& p, const Vec3d& q, const Vec3d& r, int i, int j);
+
 // True when p, q, r are collinear (coincident points included), exactly.
 bool collinear(const Vec3d& p, const Vec3d& q, const Vec3d& r);
 
