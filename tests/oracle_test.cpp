@@ -618,7 +618,8 @@ enum class Fan {
     Big,  // a star of 40 triangles, more than certifyFans looks at: not
 };
 
-// Fans of every kind (seeded), each around its own centre, half of them clockwise. centres[f] is fan f's centre vertex, kinds[f] its kind.
+// Fans of every kind (seeded), each around its own centre, half of them clockwise.
+// centres[f] is fan f's centre vertex, kinds[f] its kind.
 Mesh fanMesh(uint32_t seed, std::vector<uint32_t>& centres, std::vector<Fan>& kinds) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(0, 1);
@@ -655,8 +656,7 @@ Mesh fanMesh(uint32_t seed, std::vector<uint32_t>& centres, std::vector<Fan>& ki
             else if (kind == Fan::FlatStar) {
                 for (int step = int(rng() % 7) - 3; step != 0; step += step > 0 ? -1 : 1)
                     z = std::nextafter(z, step > 0 ? 1.0f : 0.0f);
-            } else
-                z += 0.1f * (u(rng) - 0.5f);
+            } else z += 0.1f * (u(rng) - 0.5f);
             Vec3f p = c + Vec3f(r * std::cos(angle), r * std::sin(angle), z - c.z());
             if (i == 0 && onAxis) p.y() = c.y();
             corners.push_back(p);
@@ -666,7 +666,8 @@ Mesh fanMesh(uint32_t seed, std::vector<uint32_t>& centres, std::vector<Fan>& ki
         for (const Vec3f& p : corners) m.positions.push_back(p);
         const bool clockwise = f % 12 >= 6;
         for (int i = 0; i < k; ++i) {
-            const uint32_t a = centre + 1 + uint32_t(i), b = centre + 1 + uint32_t(kind == Fan::Open ? i + 1 : (i + 1) % k);
+            const uint32_t a = centre + 1 + uint32_t(i),
+                           b = centre + 1 + uint32_t(kind == Fan::Open ? i + 1 : (i + 1) % k);
             m.triangles.push_back(clockwise ? Triangle{centre, b, a} : Triangle{centre, a, b});
         }
         centres.push_back(centre);
@@ -706,7 +707,8 @@ TEST(OracleNarrowPhase, CertifiedFansMeetOnlyAtTheirVertex) {
     // differences round in doubles (DegenerateTrianglesAreListedNotPaired's), the third moved off
     // the line along z only, so that the image along z is still a segment.
     {
-        const Vec3f q0(0x1.23eeap-24f, 0x1.b5e5fp-23f, 0x1.6cea48p-22f), q1(0x1.b262cp+17f, 0x1.45ca1p+19f, 0x1.0f7db8p+20f),
+        const Vec3f q0(0x1.23eeap-24f, 0x1.b5e5fp-23f, 0x1.6cea48p-22f),
+            q1(0x1.b262cp+17f, 0x1.45ca1p+19f, 0x1.0f7db8p+20f),
             q2(0x1.0630cp+15f, 0x1.89492p+16f, std::nextafter(0x1.47bcfp+17f, 1e30f));
         const uint8_t turns = detail::projectedTurns(q0, q1, q2, detail::planeOf(q0, q1, q2));
         EXPECT_EQ(turns, detail::projectedTurnsExact(q0, q1, q2, detail::planeOf(q0, q1, q2)));
@@ -752,7 +754,8 @@ TEST(OracleNarrowPhase, CertifiedFansMeetOnlyAtTheirVertex) {
             pairs.push_back({0, a, 0, b});
         }
     // Both answers occur (the wound and open fans' inner turns cross their outer ones).
-    EXPECT_GT(std::count_if(expected.begin(), expected.end(), [](auto& e) { return e.second == Contact::Crossing; }), 20);
+    EXPECT_GT(std::count_if(expected.begin(), expected.end(), [](auto& e) { return e.second == Contact::Crossing; }),
+              20);
     EXPECT_GT(skipped, 200);
     const detail::StoredPrims stored[1] = {{prims.data(), planes.data()}};
     std::vector<detail::Hit> hits(pairs.size());

@@ -173,10 +173,10 @@ inline uint32_t matches(const uint32_t* from, uint32_t size, uint32_t id) {
 
 void certifyFans(std::span<Prim> prims, size_t vertexCount, PageArena* arena) {
     const size_t n = prims.size();
-    // Per vertex, its fan's corners (record * 4 + corner: below 2^31) by a counting sort, and the turns every
-    // record of its fan has: 4 bytes per corner and 5 per vertex, in one array so that a large
-    // mesh's goes back to the system when freed (the arena keeps its chunks to the call's end:
-    // docs/oracle.md, "Fans").
+    // Per vertex, its fan's corners (record * 4 + corner: below 2^31, as records are below 2^29)
+    // by a counting sort, and the turns every record of its fan has: 4 bytes per corner and 5 per
+    // vertex, in one array so that a large mesh's goes back to the system when freed (the arena
+    // keeps its chunks to the call's end: docs/oracle.md, "Fans").
     Buffer<uint32_t> scratch{ArenaAllocator<uint32_t>(arena)};
     scratch.resize(vertexCount + 1 + 3 * n + (vertexCount + 3) / 4);
     uint32_t* const end = scratch.data();  // vertex v's corners end at end[v] (from end[v - 1], or 0)
