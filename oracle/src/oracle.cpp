@@ -344,7 +344,8 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
                          std::to_string(truth.trianglesTested) +
                              " triangles to test: the oracle's broad phase takes at most 2^29 (536,870,912)");
     // The fans, then the boxes from the records, once those arrays are gone: the fans' scratch (4
-    // bytes a corner) would otherwise be the call's peak (docs/oracle.md, "Fans").
+    // bytes a corner) is never live beside them or the boxes (the 1M bunny's peak: docs/oracle.md,
+    // "Fans").
     for (size_t o = 0; o < scene.objects.size(); ++o) {
         ObjectData& d = ctx.objects[o];
         detail::certifyFans(d.prims, scene.objects[o].mesh.positions.size(), mem.arena);
