@@ -681,7 +681,8 @@ Mesh fanMesh(uint32_t seed, std::vector<uint32_t>& centres, std::vector<Fan>& ki
 // triangles meet elsewhere loses pairs: a rim winding twice (the turns alone agree), an open rim
 // over one and a half turns (the winding count alone is one), a folded star, the half-open ray
 // rule's boundary (rim corners exactly on the centre's horizontal), clockwise fans (the mirrored
-// count), nearly flat fans whose turns the filter cannot decide. Every pair against faceContact,
+// count), nearly flat fans (turns along x and y from differences of a few ulps), and a triangle
+// whose turns the filter cannot decide (differences that round). Every pair against faceContact,
 // one at a time and by batch, then end to end with stored and computed planes; and each kind
 // certified or not as it should be (stars are, so that the skip is exercised at all).
 TEST(OracleNarrowPhase, CertifiedFansMeetOnlyAtTheirVertex) {
