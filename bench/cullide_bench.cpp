@@ -45,7 +45,7 @@
 #include "cullide/oracle/oracle.h"
 #include "cullide/raster/backends.h"
 #include "cullide/raster/cpu_backend.h"
-#include "cullide/study/study.h"
+#include "cullide/pipeline/pruner.h"
 #include "cullide/scene_io.h"
 
 #include "bench_util.h"
@@ -102,7 +102,8 @@ void BM_Prune(benchmark::State& state) {
     if (state.range(2) == 2) o.autoCoverage = kDefaultAutoCoverage;
     CullideResult r;
     const double cpuBegin = threadCpuMs();
-    for (auto _ : state) r = runCullide(scene, *backend, o);
+    Pruner pruner(PruneSettings{o}, *backend);  // one frame per iteration, as `cullide prune` runs it
+    for (auto _ : state) r = pruner.prune(scene).cull;
     const double cpuMs = (threadCpuMs() - cpuBegin) / double(state.iterations());
     size_t rendered = 0, queries = 0, rendered012 = 0;
     double seconds012 = 0;
@@ -144,7 +145,8 @@ void BM_Views(benchmark::State& state) {
     o.views = state.range(2) == 0 ? ViewMode::Fit : ViewMode::Clustered;
     CullideResult r;
     const auto begin = std::chrono::steady_clock::now();
-    for (auto _ : state) r = runCullide(scene, *backend, o);
+    Pruner pruner(PruneSettings{o}, *backend);  // one frame per iteration, as `cullide prune` runs it
+    for (auto _ : state) r = pruner.prune(scene).cull;
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count() /
         double(state.iterations());
     static std::map<std::pair<int64_t, int64_t>, double> fitMs;  // by (scene, res)
@@ -175,7 +177,8 @@ void BM_Tiles(benchmark::State& state) {
     else o.width = o.height = 2000;
     CullideResult r;
     const auto begin = std::chrono::steady_clock::now();
-    for (auto _ : state) r = runCullide(scene, backend, o);
+    Pruner pruner(PruneSettings{o}, backend);
+    for (auto _ : state) r = pruner.prune(scene).cull;
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count() /
         double(state.iterations());
     static std::map<int64_t, std::pair<double, std::vector<PcsTriangle>>> whole;  // by res
@@ -195,27 +198,27 @@ BENCHMARK(BM_Tiles)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// Time to exact pairs (issue 17, part 4): prune, then the exact stage (oracle::exactStage) on its
-// PCS, per iteration; switch 0 = never (the whole loop), 1 = auto (the study's calibrated cost
-// model, study::exactStageCostModel, a fresh one per iteration so each pays its calibration).
+// Time to exact pairs: prune, then the exact stage (oracle::exactStage) on its PCS, per iteration,
+// through the Pruner (cullide/pipeline/pruner.h) as `prune --exact` runs them; switch 0 = never (the
+// whole loop), 1 = auto (a fresh Pruner per iteration, so each pays its cost model's calibration).
 // Counters: PCS, the level it switched at (-1: never), prune and exact-stage ms of the last
-// iteration, and on the auto runs x_never = never's wall time per iteration over auto's (the
-// acceptance: > 1), from the never run of the same scene and size just before.
+// iteration, and on the auto runs x_never = never's wall time per iteration over auto's (above 1:
+// the switch pays), from the never run of the same scene and size just before.
 std::map<std::pair<int64_t, int64_t>, double> neverToExactMs;
 void BM_PruneToExact(benchmark::State& state) {
     const Scene& scene = paperScene(int(state.range(0)), size_t(state.range(1)));
     auto backend = raster::makeCpuBackend();
-    CullideOptions o;
+    PruneSettings settings;
+    settings.exactStage = true;
+    if (state.range(2) == 1) settings.cullide.exactSwitch.kind = ExactSwitchKind::Auto;
     CullideResult r;
     double exactSeconds = 0;
     const auto begin = std::chrono::steady_clock::now();
     for (auto _ : state) {
-        if (state.range(2) == 1) {
-            o.exactSwitch.kind = ExactSwitchKind::Auto;
-            o.exactSwitch.exactCost = study::exactStageCostModel(scene);
-        }
-        r = runCullide(scene, *backend, o);
-        exactSeconds = oracle::exactStage(scene, r.pcs).totalSeconds;
+        Pruner pruner(settings, *backend);
+        const FramePrune frame = pruner.prune(scene);
+        r = frame.cull;
+        exactSeconds = frame.exactSeconds();
     }
     const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count() /
         double(state.iterations());
@@ -297,13 +300,12 @@ void BM_ChosenDirections(benchmark::State& state) {
     // Every frame of the workload with one mode, as prune runs them (a hierarchy cache over the
     // frames; a direction history for coherent).
     auto runAll = [&](DirectionMode mode, Totals& t) {
-        CullideOptions o;
-        o.directionMode = mode;
-        o.hierarchyCache = std::make_shared<HierarchyCache>();
-        if (mode == DirectionMode::Coherent) o.directionHistory = std::make_shared<DirectionHistory>();
+        PruneSettings settings;
+        settings.cullide.directionMode = mode;
+        Pruner pruner(settings, *backend, frames.size());
         const double begin = threadCpuMs();
         for (const Scene& s : frames) {
-            const CullideResult r = runCullide(s, *backend, o);
+            const CullideResult r = pruner.prune(s).cull;
             t.calls += r.passes.size(), t.pcs += r.pcs.size();
         }
         t.ms += threadCpuMs() - begin;

@@ -36,19 +36,7 @@ DepthFormat DepthFormat::unorm(int n) {
     return {Kind::Unorm, n};
 }
 
-DepthFormat DepthFormat::parse(const std::string& text) {
-    std::string t;
-    for (char c : text) t.push_back(char(std::tolower(static_cast<unsigned char>(c))));
-    if (t == "float" || t == "f32" || t == "d32f" || t == "float32") return float32();
-    std::string digits = t;
-    if (digits.rfind("unorm", 0) == 0) digits = digits.substr(5);
-    else if (digits.rfind("d", 0) == 0) digits = digits.substr(1);
-    const bool numeric = !digits.empty() && digits.size() <= 2 &&
-        std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
-    if (!numeric)
-        throw InputError("depth format", "'" + text + "' is not a depth format (use 8..32, d24, unorm16, float, d32f)");
-    return unorm(std::stoi(digits));
-}
+// DepthFormat::parse is with the other option parsers (options.cpp).
 
 std::string DepthFormat::name() const {
     if (kind == Kind::Float32) return "D32F";

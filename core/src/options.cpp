@@ -4,6 +4,7 @@
 #include "cullide/error.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <sstream>
 #include <tuple>
@@ -155,6 +156,41 @@ CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& na
     o.exactSwitch = parseExactSwitch(text.exactSwitch, names.exactSwitch);
     o.validate();  // nothing left to refuse: the checks above cover it
     return o;
+}
+
+// A depth format by name (declared with DepthFormat, depth_backend.h).
+DepthFormat DepthFormat::parse(const std::string& text) {
+    std::string t;
+    for (char c : text) t.push_back(char(std::tolower(static_cast<unsigned char>(c))));
+    if (t == "float" || t == "f32" || t == "d32f" || t == "float32") return float32();
+    std::string digits = t;
+    if (digits.rfind("unorm", 0) == 0) digits = digits.substr(5);
+    else if (digits.rfind("d", 0) == 0) digits = digits.substr(1);
+    const bool numeric = !digits.empty() && digits.size() <= 2 &&
+        std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
+    if (!numeric)
+        throw InputError("depth format", "'" + text + "' is not a depth format (use 8..32, d24, unorm16, float, d32f)");
+    return unorm(std::stoi(digits));
+}
+
+int checkThreads(long long threads, const std::string& name) {
+    if (threads < 0 || threads > kMaxThreads)
+        throw InputError(name, std::to_string(threads) + " is not 0 (all cores) to " + std::to_string(kMaxThreads));
+    return int(threads);
+}
+
+DepthFunc parseDepthFunc(const std::string& text, const std::string& name) {
+    static const char* names[] = {"never", "less", "equal", "lequal", "greater", "notequal", "gequal", "always"};
+    for (int i = 0; i < 8; ++i)
+        if (text == names[i]) return DepthFunc(i);
+    throw InputError(name,
+                     "'" + text + "' is not one of never, less, equal, lequal, greater, notequal, gequal, always");
+}
+
+QueryKind parseQueryKind(const std::string& text, const std::string& name) {
+    if (text == "samples") return QueryKind::SamplesPassed;
+    if (text == "any") return QueryKind::AnySamplesPassed;
+    throw InputError(name, "'" + text + "' is not 'samples' or 'any'");
 }
 
 }  // namespace cullide

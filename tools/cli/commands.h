@@ -6,10 +6,7 @@
 // bug: "cullide: internal error: ..." and status 70, never an abort.
 #pragma once
 
-#include "cullide/error.h"
-#include "cullide/options.h"
-#include "cullide/scene.h"
-#include "cullide/study/progress.h"
+#include "common.h"
 
 #include <CLI/CLI.hpp>
 
@@ -31,31 +28,6 @@ using Action = std::function<int()>;
 // allocate and free large buffers over and over (study: 120k page faults instead of 16k, 20-40%
 // of its time; prune of 9 frames: 25% more CPU), which keep glibc's default.
 void preferSmallFootprint();
-
-// The frames [first, last) a --frame value selects (frame < 0: every frame). Throws
-// InputError("option --frame") when `animation`, read from `path`, has no such frame.
-struct FrameRange {
-    size_t first = 0, last = 0;
-};
-inline FrameRange selectFrames(const Animation& animation, long frame, const std::string& path) {
-    if (frame < 0) return {0, animation.frameCount()};
-    if (size_t(frame) >= animation.frameCount())
-        throw InputError("option --frame",
-                         "frame " + std::to_string(frame) + " requested, but " + path + " has " +
-                             std::to_string(animation.frameCount()) + " frame(s)");
-    return {size_t(frame), size_t(frame) + 1};
-}
-
-// Cullide's options (method, resolution, depth, directions, hierarchy, leaf size, branching,
-// seed) on a subcommand, with the same help everywhere; checkCullideOptions() in its callback
-// refuses an option that does not apply (--seed without --hierarchy random).
-void addCullideOptions(CLI::App* sub, OptionText& text);
-void checkCullideOptions(const CLI::App* sub, const OptionText& text);
-
-// --progress auto|always|never on a subcommand that can run long: the progress bar on stderr
-// (cullide/study/progress.h), with the same help everywhere. A bad value is an
-// InputError("option --progress") while parsing (exit status 2).
-void addProgressOption(CLI::App* sub, study::ProgressMode& mode);
 
 // The command line this process runs, as a POSIX shell reads it back: argv[0] as "cullide" (its
 // basename: no machine path in the outputs), each other argument quoted where the shell would

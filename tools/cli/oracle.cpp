@@ -10,7 +10,7 @@
 #include "cullide/provenance.h"
 #include "cullide/scene_io.h"
 #include "cullide/study/measures.h"
-#include "cullide/study/progress.h"
+#include "cullide/pipeline/progress.h"
 
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
@@ -33,7 +33,7 @@ struct OracleCommandOptions {
     int threads = 0;
     bool weld = false;
     std::string broadPhase = "grid";
-    study::ProgressMode progress = study::ProgressMode::Auto;
+    ProgressMode progress = ProgressMode::Auto;
 };
 
 int runOracle(const OracleCommandOptions& o) {
@@ -52,7 +52,7 @@ int runOracle(const OracleCommandOptions& o) {
     std::optional<oracle::Workspace> workspace;
     if (last - first > 1) workspace.emplace();
     // Per frame: the oracle has no hook within a frame (and its results must not depend on one).
-    study::Progress bar("oracle", last - first, "frames", o.progress);
+    Progress bar("oracle", last - first, "frames", o.progress);
     for (size_t f = first; f < last; ++f) {
         if (bar.shown()) {
             std::string detail = "frame ";
@@ -70,7 +70,7 @@ int runOracle(const OracleCommandOptions& o) {
         size_t self = 0;
         for (const oracle::IntersectingPair& p : t.pairs) self += p.selfPair();
         bar.update(f - first + 1);
-        const study::Progress::Pause pause(&bar);  // the frame's line on stdout
+        const Progress::Pause pause(&bar);  // the frame's line on stdout
         std::printf(
             "frame %zu: %zu intersecting pair(s): %zu crossing, %zu touching (%zu within objects, %zu between); "
             "%zu degenerate triangle(s); %zu triangles, %zu candidate pairs; %.1f ms (setup %.1f, build %.1f, "
@@ -118,7 +118,7 @@ int runOracle(const OracleCommandOptions& o) {
 }  // namespace
 
 PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const CullideOptions& options, bool check,
-                  bool exact) {
+                  const oracle::Truth* exact) {
     PcsCheck out;
     out.json = nlohmann::ordered_json::object();
     if (check) {
@@ -162,8 +162,7 @@ PcsCheck checkPcs(const Scene& scene, std::span<const PcsTriangle> pcs, const Cu
                              {"missed", missed}};
     }
     if (exact) {
-        const oracle::Truth t = oracle::exactStage(scene, pcs);
-        out.exactSeconds = t.totalSeconds;
+        const oracle::Truth& t = *exact;
         std::printf(
             "  exact: %zu intersecting pair(s) among the PCS (%zu crossing, %zu touching), %zu degenerate "
             "triangle(s); %.1f ms\n",
@@ -188,7 +187,7 @@ void addOracleCommand(CLI::App& app, Action& action) {
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
     sub->add_option("--json", o->json, "Write the pairs as [objectA, triA, objectB, triB, class] rows, sorted");
     sub->add_option("--frame", o->frame, "Only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
-    sub->add_option("--threads", o->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));
+    addThreadsOption(sub, o->threads);
     sub->add_flag("--weld", o->weld, "Treat bit-identical vertices of an object as one vertex (soups)");
     sub->add_option("--broad-phase", o->broadPhase, "grid (ours, faster) | embree (Embree 3 rtcCollide); same pairs")
         ->capture_default_str();

@@ -13,7 +13,6 @@
 #include "cullide/provenance.h"
 #include "cullide/raster/backends.h"
 #include "cullide/scene_io.h"
-#include "cullide/study/progress.h"
 #include "cullide/study/study.h"
 
 #include <nlohmann/json.hpp>
@@ -39,7 +38,7 @@ struct PruneOptions {
     std::string frames;  // folder for the Figure 12 pictures
     bool check = false, exact = false;  // against the exact oracle (oracle.h)
     bool rebuildHierarchy = false;  // build every frame's hierarchies, as the paper does
-    study::ProgressMode progress = study::ProgressMode::Auto;
+    ProgressMode progress = ProgressMode::Auto;
 };
 
 // The scene at one frame as one mesh, PCS triangles green and the rest grey (Figures 6 and 7).
@@ -52,21 +51,8 @@ void writePcsPly(const Scene& scene, const std::vector<PcsTriangle>& pcs, const 
     writePly(all.mesh, path, w);
 }
 
-int runPruneFrames(const PruneOptions& o) {
-    const CullideOptions options = parseCullideOptions(o.cullide);
-    const std::unique_ptr<DepthBackend> made = raster::makeBackend(o.backend, o.threads);
-    // --max-viewport: the backend as one with that limit would look; larger calls are drawn in tiles.
-    std::unique_ptr<raster::ViewportLimit> limited;
-    if (o.maxViewport > 0) limited = std::make_unique<raster::ViewportLimit>(*made, o.maxViewport);
-    DepthBackend* const backend = limited ? static_cast<DepthBackend*>(limited.get()) : made.get();
-
-    Animation animation = loadScene(o.scene);
-    const auto [first, last] = selectFrames(animation, o.frame, o.scene);
-    if (!o.out.empty() && o.frame < 0 && animation.frameCount() > 1)
-        throw InputError("option --out",
-                         "the scene has " + std::to_string(animation.frameCount()) +
-                             " frames; choose one with --frame to write its PLY");
-
+// The run's one line: the method and every option that shapes the PCS, and the backend.
+void printRunLine(const PruneOptions& o, const CullideOptions& options, const DepthBackend& backend) {
     char viewport[80];
     if (options.autoCoverage > 0)
         std::snprintf(viewport, sizeof viewport, "auto:%g (at least %dx%d)", options.autoCoverage, options.width,
@@ -85,20 +71,139 @@ int runPruneFrames(const PruneOptions& o) {
     std::printf("%s: %s, %s, %s, %s, %s hierarchy (leaf %u, branching %u)%s, %s\n", o.scene.c_str(),
                 toString(options.method), viewport, options.depth.name().c_str(), directions,
                 toString(options.hierarchy.kind), options.hierarchy.leafSize, options.hierarchy.branching,
-                exactSwitch.c_str(), backend->describe().c_str());
+                exactSwitch.c_str(), backend.describe().c_str());
+}
+
+// A frame's lines: the PCS and the work that made it, and where the loop switched to exact.
+void printFrameLines(size_t f, const CullideResult& r, size_t total, size_t objectCount, const CullideOptions& options) {
+    size_t rendered = 0, queries = 0;
+    for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
+    std::map<uint32_t, size_t> perObject;
+    for (const PcsTriangle& p : r.pcs) ++perObject[p.object];
+    std::printf(
+        "frame %zu: PCS %zu of %zu triangles (%.2f%%) in %zu object(s); %u level(s), %zu reducePCS calls, "
+        "%zu triangles rendered, %zu queries; hierarchy %.1f ms%s, total %.1f ms\n",
+        f, r.pcs.size(), total, total ? 100.0 * double(r.pcs.size()) / double(total) : 0.0, perObject.size(), r.levels,
+        r.passes.size(), rendered, queries, 1e3 * r.hierarchySeconds,
+        r.hierarchiesReused == 0                 ? ""
+            : r.hierarchiesReused == objectCount ? " (reused)"
+                                                 : " (some reused)",
+        1e3 * r.totalSeconds);
+    if (r.switchedAtLevel >= 0 && options.exactSwitch.kind == ExactSwitchKind::Auto)
+        std::printf(
+            "  switched to exact at level %d with %zu PCS triangles (predicted: next level %.2f ms, "
+            "exact stage %.2f ms)\n",
+            r.switchedAtLevel, r.switchedAtTriangles, 1e3 * r.predictedLevelSeconds, 1e3 * r.predictedExactSeconds);
+    else if (r.switchedAtLevel >= 0)
+        std::printf("  switched to exact at level %d with %zu PCS triangles\n", r.switchedAtLevel,
+                    r.switchedAtTriangles);
+}
+
+// A frame's entry of --json's "frames".
+nlohmann::ordered_json frameJson(size_t f, size_t total, const CullideResult& r, const CullideOptions& options) {
+    nlohmann::ordered_json pcs = nlohmann::ordered_json::array();
+    for (const PcsTriangle& p : r.pcs) pcs.push_back({p.object, p.triangle});
+    nlohmann::ordered_json passes = nlohmann::ordered_json::array();
+    for (const PassStats& p : r.passes) passes.push_back(study::passJson(p, options));
+    nlohmann::ordered_json j = {{"frame", f},
+                                {"triangles", total},
+                                {"pcs", pcs},
+                                {"passes", passes},
+                                {"levels", r.levels},
+                                {"hierarchy_seconds", r.hierarchySeconds},
+                                {"hierarchies_reused", r.hierarchiesReused},
+                                {"total_seconds", r.totalSeconds}};
+    if (options.exactSwitch.kind != ExactSwitchKind::Never)
+        j["switched_at_level"] =
+            r.switchedAtLevel >= 0 ? nlohmann::ordered_json(r.switchedAtLevel) : nlohmann::ordered_json();
+    return j;
+}
+
+// The whole --json document: the options, the objects' names, the frames, the provenance.
+nlohmann::ordered_json runJson(const PruneOptions& o, const CullideOptions& options, const DepthBackend& backend,
+                               nlohmann::ordered_json objectNames, nlohmann::ordered_json frames) {
+    nlohmann::ordered_json j = {{"scene", o.scene},
+                                {"options",
+                                 {{"method", toString(options.method)},
+                                  {"width", options.width},
+                                  {"height", options.height},
+                                  {"depth", options.depth.name()},
+                                  {"directions", nlohmann::ordered_json::array()},
+                                  {"hierarchy", toString(options.hierarchy.kind)},
+                                  {"leaf_size", options.hierarchy.leafSize},
+                                  {"branching", options.hierarchy.branching},
+                                  {"backend", backend.describe()}}},
+                                {"objects", std::move(objectNames)},
+                                {"frames", std::move(frames)}};
+    for (const Vec3d& d : options.directions) j["options"]["directions"].push_back({d.x(), d.y(), d.z()});
+    // Adaptive resolution: width x height is the smallest viewport; each pass has its own.
+    if (options.autoCoverage > 0) j["options"]["auto_coverage"] = options.autoCoverage;
+    // Clustered views (absent for fit): each pass records its views.
+    if (options.views != ViewMode::Fit) j["options"]["views"] = toString(options.views);
+    // Chosen directions: "directions" is the fixed list (coherent's, or the axes pca falls back
+    // to); each pass records its own direction_vector.
+    if (options.directionMode != DirectionMode::Fixed) j["options"]["direction_mode"] = toString(options.directionMode);
+    if (options.exactSwitch.kind != ExactSwitchKind::Never) j["options"]["exact_switch"] = o.cullide.exactSwitch;
+    // The GL and Vulkan backends' descriptions name their driver; the CPU reference rasterizer has none.
+    std::vector<std::string> drivers;
+    if (o.backend != "cpu") drivers.push_back(backend.describe());
+    j["provenance"] = toJson(provenance(o.threads, drivers));
+    return j;
+}
+
+// --frames: the paper's Figure 12, the PCS before and after each reducePCS call of frame `f`,
+// from a fixed three-quarter view. Writes the first picture (everything) and returns the hook
+// that writes one per call.
+FrameHooks pictureHooks(const std::string& folder, const Scene& scene, size_t f,
+                        std::unique_ptr<PcsPictures>& pictures) {
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (ec) throw InputError(folder, "cannot create the folder: " + ec.message());
+    pictures = std::make_unique<PcsPictures>(scene, Vec3d(-0.4, -0.5, -0.77), 512, 512);
+    auto nameOf = [f](int pass) {
+        char name[64];
+        std::snprintf(name, sizeof name, "frame%04zu_pass%03d.png", f, pass);
+        return std::filesystem::path(name);
+    };
+    std::vector<PcsTriangle> everything;
+    for (uint32_t i = 0; i < scene.objects.size(); ++i)
+        for (uint32_t t = 0; t < scene.objects[i].mesh.triangleCount(); ++t) everything.push_back({i, t});
+    pictures->write(everything, std::filesystem::path(folder) / nameOf(0));
+    FrameHooks hooks;
+    hooks.onPass = [&pictures, folder, nameOf, pass = 0](const PassStats&, std::span<const PcsTriangle> pcs) mutable {
+        pictures->write(pcs, std::filesystem::path(folder) / nameOf(++pass));
+    };
+    return hooks;
+}
+
+// The whole command in one process: every selected frame through one Pruner (pruner.h), each
+// frame's lines, checks and outputs as it is done.
+int runPruneFrames(const PruneOptions& o) {
+    const CullideOptions options = parseCullideOptions(o.cullide);
+    const std::unique_ptr<DepthBackend> made = raster::makeBackend(o.backend, o.threads);
+    // --max-viewport: the backend as one with that limit would look; larger calls are drawn in tiles.
+    std::unique_ptr<raster::ViewportLimit> limited;
+    if (o.maxViewport > 0) limited = std::make_unique<raster::ViewportLimit>(*made, o.maxViewport);
+    DepthBackend* const backend = limited ? static_cast<DepthBackend*>(limited.get()) : made.get();
+
+    Animation animation = loadScene(o.scene);
+    const auto [first, last] = selectFrames(animation, o.frame, o.scene);
+    if (!o.out.empty() && o.frame < 0 && animation.frameCount() > 1)
+        throw InputError("option --out",
+                         "the scene has " + std::to_string(animation.frameCount()) +
+                             " frames; choose one with --frame to write its PLY");
+    printRunLine(o, options, *backend);
+
+    PruneSettings settings;
+    settings.cullide = options;
+    settings.exactStage = o.exact;
+    settings.reuseHierarchies = !o.rebuildHierarchy;
+    Pruner pruner(settings, *backend, last - first);
+    nlohmann::ordered_json objectNames = nlohmann::ordered_json::array();  // before a still scene moves
+    for (const Object& obj : animation.scene.objects) objectNames.push_back(obj.name);
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
     bool guaranteeBroken = false;  // --check found a false prune the method promises not to make
-    study::Progress bar("prune", last - first, "frames", o.progress);
-    // Over several frames, an object whose triangles do not change keeps its hierarchy (the same
-    // PCS, bit for bit: hierarchy.h); one frame has nothing to reuse, so nothing is kept.
-    std::shared_ptr<HierarchyCache> hierarchies;
-    nlohmann::ordered_json objectNames = nlohmann::ordered_json::array();
-    for (const Object& obj : animation.scene.objects) objectNames.push_back(obj.name);
-    if (!o.rebuildHierarchy && last - first > 1) hierarchies = std::make_shared<HierarchyCache>();
-    // Coherent directions learn from frame to frame; one frame is a full check.
-    std::shared_ptr<DirectionHistory> history;
-    if (options.directionMode == DirectionMode::Coherent && last - first > 1)
-        history = std::make_shared<DirectionHistory>();
+    Progress bar("prune", last - first, "frames", o.progress);
     for (size_t f = first; f < last; ++f) {
         const size_t done = f - first;
         std::string frameName = "frame ";  // built stepwise: GCC 12's -Wrestrict on "..." + std::string
@@ -107,141 +212,40 @@ int runPruneFrames(const PruneOptions& o) {
         // A still scene pruned once is moved, not copied, out of the file's (peak memory).
         Scene scene = last - first == 1 && animation.frames.empty() ? std::move(animation.scene) : animation.sceneAt(f);
         const size_t total = scene.triangleCount(), objectCount = scene.objects.size();
-        CullideOptions frameOptions = options;
-        frameOptions.hierarchyCache = hierarchies;
-        frameOptions.directionHistory = history;
-        // Auto's exact-stage cost, calibrated on this frame (timed inside the run when it predicts).
-        if (options.exactSwitch.kind == ExactSwitchKind::Auto)
-            frameOptions.exactSwitch.exactCost = study::exactStageCostModel(scene);
-        // Within a frame, per reducePCS call: a large scene's frame can take minutes. Set only when
-        // the bar is drawn, so that a hidden bar leaves the run exactly as it was.
-        if (bar.shown())
-            frameOptions.onPassStats = [&, directions = options.directions.size()](const PassStats& st) {
-                if (!bar.due()) return;
-                char text[160];
-                std::snprintf(text, sizeof text, "%s: level %u, direction %u/%zu, PCS %zu triangles", frameName.c_str(),
-                              st.level, st.direction + 1, directions, st.trianglesOut);
-                bar.update(done, text);
-            };
+        // Within a frame, per reducePCS call: a large scene's frame can take minutes.
+        FrameHooks hooks = passProgress(bar, frameName, done, options.directions.size());
         std::unique_ptr<PcsPictures> pictures;
-        if (!o.frames.empty()) {
-            // The paper's Figure 12: the PCS after each reducePCS, from a fixed three-quarter view.
-            std::error_code ec;
-            std::filesystem::create_directories(o.frames, ec);
-            if (ec) throw InputError(o.frames, "cannot create the folder: " + ec.message());
-            pictures = std::make_unique<PcsPictures>(scene, Vec3d(-0.4, -0.5, -0.77), 512, 512);
-            char name[64];
-            std::snprintf(name, sizeof name, "frame%04zu_pass%03d.png", f, 0);
-            std::vector<PcsTriangle> everything;
-            for (uint32_t i = 0; i < scene.objects.size(); ++i)
-                for (uint32_t t = 0; t < scene.objects[i].mesh.triangleCount(); ++t) everything.push_back({i, t});
-            pictures->write(everything, std::filesystem::path(o.frames) / name);
-            frameOptions.onPass = [&, pass = 0](const PassStats&, std::span<const PcsTriangle> pcs) mutable {
-                std::snprintf(name, sizeof name, "frame%04zu_pass%03d.png", f, ++pass);
-                pictures->write(pcs, std::filesystem::path(o.frames) / name);
-            };
-        }
+        if (!o.frames.empty()) hooks.onPass = pictureHooks(o.frames, scene, f, pictures).onPass;
         // Given up to the run (emptied once uploaded) unless something below reads it.
-        // (auto's exact-stage cost model calibrates on it during the run, after the upload.)
-        const bool sceneNeeded =
-            o.check || o.exact || !o.out.empty() || pictures || options.exactSwitch.kind == ExactSwitchKind::Auto;
-        const CullideResult r = sceneNeeded ? runCullide(scene, *backend, frameOptions)
-                                            : runCullide(std::move(scene), *backend, frameOptions);
-        size_t rendered = 0, queries = 0;
-        for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
-        std::map<uint32_t, size_t> perObject;
-        for (const PcsTriangle& p : r.pcs) ++perObject[p.object];
-        std::optional<study::Progress::Pause> pause;  // the lines below go to stdout
+        const bool sceneNeeded = o.check || !o.out.empty() || pictures;
+        const FramePrune r = sceneNeeded ? pruner.prune(scene, hooks) : pruner.prune(std::move(scene), hooks);
+        std::optional<Progress::Pause> pause;  // the lines below go to stdout
         pause.emplace(&bar);
-        std::printf(
-            "frame %zu: PCS %zu of %zu triangles (%.2f%%) in %zu object(s); %u level(s), %zu reducePCS calls, "
-            "%zu triangles rendered, %zu queries; hierarchy %.1f ms%s, total %.1f ms\n",
-            f, r.pcs.size(), total, total ? 100.0 * double(r.pcs.size()) / double(total) : 0.0, perObject.size(),
-            r.levels, r.passes.size(), rendered, queries, 1e3 * r.hierarchySeconds,
-            r.hierarchiesReused == 0                 ? ""
-                : r.hierarchiesReused == objectCount ? " (reused)"
-                                                     : " (some reused)",
-            1e3 * r.totalSeconds);
-        if (r.switchedAtLevel >= 0 && options.exactSwitch.kind == ExactSwitchKind::Auto)
-            std::printf(
-                "  switched to exact at level %d with %zu PCS triangles (predicted: next level %.2f ms, "
-                "exact stage %.2f ms)\n",
-                r.switchedAtLevel, r.switchedAtTriangles, 1e3 * r.predictedLevelSeconds, 1e3 * r.predictedExactSeconds);
-        else if (r.switchedAtLevel >= 0)
-            std::printf("  switched to exact at level %d with %zu PCS triangles\n", r.switchedAtLevel,
-                        r.switchedAtTriangles);
-        if (!o.json.empty()) {
-            nlohmann::ordered_json pcs = nlohmann::ordered_json::array();
-            for (const PcsTriangle& p : r.pcs) pcs.push_back({p.object, p.triangle});
-            nlohmann::ordered_json passes = nlohmann::ordered_json::array();
-            for (const PassStats& p : r.passes) passes.push_back(study::passJson(p, options));
-            frames.push_back({{"frame", f},
-                              {"triangles", total},
-                              {"pcs", pcs},
-                              {"passes", passes},
-                              {"levels", r.levels},
-                              {"hierarchy_seconds", r.hierarchySeconds},
-                              {"hierarchies_reused", r.hierarchiesReused},
-                              {"total_seconds", r.totalSeconds}});
-            if (options.exactSwitch.kind != ExactSwitchKind::Never)
-                frames.back()["switched_at_level"] =
-                    r.switchedAtLevel >= 0 ? nlohmann::ordered_json(r.switchedAtLevel) : nlohmann::ordered_json();
-        }
+        printFrameLines(f, r.cull, total, objectCount, options);
+        if (!o.json.empty()) frames.push_back(frameJson(f, total, r.cull, options));
         if (o.check || o.exact) {
             pause.reset();
-            std::string detail = frameName;
-            detail += o.check ? ": oracle check" : ": exact stage";
-            bar.update(done, detail);
+            if (o.check) bar.update(done, frameName + ": oracle check");
             pause.emplace(&bar);  // checkPcs prints its lines
-            const PcsCheck c = checkPcs(scene, r.pcs, options, o.check, o.exact);
+            const PcsCheck c = checkPcs(scene, r.cull.pcs, options, o.check, r.exact ? &*r.exact : nullptr);
             guaranteeBroken = guaranteeBroken || c.guaranteeBroken;
             if (!o.json.empty()) frames.back().update(c.json);
             if (o.exact) {
-                // The pipeline's latency: image-space pruning, then the exact stage on its PCS.
-                const double toExact = r.totalSeconds + c.exactSeconds;
-                std::printf("  time to exact pairs: %.1f ms (prune %.1f + exact stage %.1f)\n", 1e3 * toExact,
-                            1e3 * r.totalSeconds, 1e3 * c.exactSeconds);
+                std::printf("  time to exact pairs: %.1f ms (prune %.1f + exact stage %.1f)\n",
+                            1e3 * r.timeToExactSeconds(), 1e3 * r.cull.totalSeconds, 1e3 * r.exactSeconds());
                 if (!o.json.empty()) {
-                    frames.back()["exact_seconds"] = c.exactSeconds;
-                    frames.back()["time_to_exact_pairs_seconds"] = toExact;
+                    frames.back()["exact_seconds"] = r.exactSeconds();
+                    frames.back()["time_to_exact_pairs_seconds"] = r.timeToExactSeconds();
                 }
             }
         }
-        if (!o.out.empty()) writePcsPly(scene, r.pcs, o.out);
+        if (!o.out.empty()) writePcsPly(scene, r.cull.pcs, o.out);
         pause.reset();
         bar.update(done + 1);
     }
     bar.finish();
-    if (!o.json.empty()) {
-        nlohmann::ordered_json j = {{"scene", o.scene},
-                                    {"options",
-                                     {{"method", toString(options.method)},
-                                      {"width", options.width},
-                                      {"height", options.height},
-                                      {"depth", options.depth.name()},
-                                      {"directions", nlohmann::ordered_json::array()},
-                                      {"hierarchy", toString(options.hierarchy.kind)},
-                                      {"leaf_size", options.hierarchy.leafSize},
-                                      {"branching", options.hierarchy.branching},
-                                      {"backend", backend->describe()}}},
-                                    {"objects", objectNames},
-                                    {"frames", frames}};
-        for (const Vec3d& d : options.directions) j["options"]["directions"].push_back({d.x(), d.y(), d.z()});
-        // Adaptive resolution: width x height is the smallest viewport; each pass has its own.
-        if (options.autoCoverage > 0) j["options"]["auto_coverage"] = options.autoCoverage;
-        // Clustered views (absent for fit, as before the option): each pass records its views.
-        if (options.views != ViewMode::Fit) j["options"]["views"] = toString(options.views);
-        // Chosen directions: "directions" is the fixed list (coherent's, or the axes pca falls back
-        // to); each pass records its own direction_vector.
-        if (options.directionMode != DirectionMode::Fixed)
-            j["options"]["direction_mode"] = toString(options.directionMode);
-        if (options.exactSwitch.kind != ExactSwitchKind::Never) j["options"]["exact_switch"] = o.cullide.exactSwitch;
-        // The GL and Vulkan backends' descriptions name their driver; the CPU reference rasterizer has none.
-        std::vector<std::string> drivers;
-        if (o.backend != "cpu") drivers.push_back(backend->describe());
-        j["provenance"] = toJson(provenance(o.threads, drivers));
-        writeFileAtomically(o.json, j.dump(1) + "\n");
-    }
+    if (!o.json.empty())
+        writeFileAtomically(o.json, runJson(o, options, *backend, std::move(objectNames), std::move(frames)).dump(1) + "\n");
     return guaranteeBroken ? 1 : 0;
 }
 
@@ -268,10 +272,7 @@ void addPruneCommand(CLI::App& app, Action& action) {
            "cpu (the reference rasterizer) | gl (OpenGL 4.5 through headless EGL) | vulkan (Vulkan 1.1+, headless)")
         ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
-    sub->add_option("--threads", o->threads,
-                    "Worker threads of the whole run: hierarchies, view fits, the CPU backend (0: all cores; 1 to "
-                    "1024)")
-        ->check(CLI::Range(0, 1024));
+    addThreadsOption(sub, o->threads, "Worker threads of the whole run: hierarchies, view fits, the CPU backend");
     sub->add_option("--max-viewport", o->maxViewport,
                     "Draw as a backend whose largest viewport side is N pixels: calls larger than that in tiles, "
                     "the same PCS (1.." +

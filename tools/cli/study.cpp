@@ -27,7 +27,7 @@ struct StudyCliOptions {
     std::string shard;
     std::string out = "study.csv";
     bool quiet = false;
-    study::ProgressMode progress = study::ProgressMode::Auto;
+    ProgressMode progress = ProgressMode::Auto;
     // Stability sweeps
     std::string stability;
     int trials = 0, resolution = 0;
@@ -133,7 +133,7 @@ int runStudyCommand(const StudyCliOptions& o) {
     if (!o.shard.empty()) so.shard = study::parseShard(o.shard);
     so.out = o.out;
     so.command = commandLine();
-    so.progress = o.quiet ? study::ProgressMode::Never : o.progress;
+    so.progress = o.quiet ? ProgressMode::Never : o.progress;
     size_t unexplained = 0;
     so.onRecord = [&](const nlohmann::ordered_json& r) {
         if (!r["fp_unexplained"].is_null()) unexplained += r["fp_unexplained"].get<size_t>();

@@ -51,7 +51,7 @@ Json workloadJson(const std::string& scene, const CullideOptions& options) {
 
 Recording recordTrace(const Animation& animation, size_t first, size_t last, const CullideOptions& options,
                       const raster::TraceRules& rules, int threads, const std::string& path, const Json& workload,
-                      study::Progress* bar) {
+                      Progress* bar) {
     if (options.method == CullMethod::Reliable)
         throw InputError("option --method",
                          "the reliable method's conservative commands have no GL or Vulkan counterpart; trace the "
@@ -66,27 +66,19 @@ Recording recordTrace(const Animation& animation, size_t first, size_t last, con
     raster::TraceRecorder recorder(*cpu, writer, rules, threads);
     Recording out;
     const bool shown = bar && bar->shown();
-    // Coherent directions learn from frame to frame, as in prune; one frame is a full check.
-    std::shared_ptr<DirectionHistory> history;
-    if (options.directionMode == DirectionMode::Coherent && last - first > 1)
-        history = std::make_shared<DirectionHistory>();
+    // Coherent directions learn from frame to frame, as in prune; each frame builds its hierarchies.
+    PruneSettings settings;
+    settings.cullide = options;
+    settings.reuseHierarchies = false;
+    Pruner pruner(settings, recorder, last - first);
     for (size_t f = first; f < last; ++f) {
         std::string frameName = "frame ";
         frameName += std::to_string(f);
         if (shown) bar->update(f - first, frameName);
-        CullideOptions frameOptions = options;
-        frameOptions.directionHistory = history;
-        // Within a frame, per reducePCS call; set only when the bar is drawn (nothing else changes).
-        if (shown)
-            frameOptions.onPassStats = [&, directions = options.directions.size()](const PassStats& st) {
-                if (!bar->due()) return;
-                char text[160];
-                std::snprintf(text, sizeof text, "%s: level %u, direction %u/%zu, PCS %zu triangles", frameName.c_str(),
-                              st.level, st.direction + 1, directions, st.trianglesOut);
-                bar->update(f - first, text);
-            };
+        // Within a frame, per reducePCS call (nothing else changes).
+        const FrameHooks hooks = shown ? passProgress(*bar, frameName, f - first, options.directions.size()) : FrameHooks{};
         recorder.setFrame(uint32_t(f));
-        out.pcs.push_back(runCullide(animation.sceneAt(f), recorder, frameOptions).pcs);
+        out.pcs.push_back(pruner.prune(animation.sceneAt(f), hooks).cull.pcs);
         if (shown) {
             frameName += ": intervals";
             bar->update(f - first, frameName);
@@ -244,7 +236,7 @@ struct RecordOptions {
     int threads = 0;
     long frame = -1;
     raster::TraceRules rules;
-    study::ProgressMode progress = study::ProgressMode::Auto;
+    ProgressMode progress = ProgressMode::Auto;
 };
 
 int runRecord(const RecordOptions& o) {
@@ -253,7 +245,7 @@ int runRecord(const RecordOptions& o) {
     const Animation animation = loadScene(o.scene);
     const auto [first, last] = selectFrames(animation, o.frame, o.scene);
     const auto start = std::chrono::steady_clock::now();
-    study::Progress bar("trace record", last - first, "frames", o.progress);
+    Progress bar("trace record", last - first, "frames", o.progress);
     const Recording r =
         recordTrace(animation, first, last, options, o.rules, o.threads, o.out, workloadJson(o.scene, options), &bar);
     bar.finish();
@@ -279,7 +271,7 @@ int runRecord(const RecordOptions& o) {
 struct ReplayOptions {
     std::string trace, backend = "cpu", out;
     int threads = 0;
-    study::ProgressMode progress = study::ProgressMode::Auto;
+    ProgressMode progress = ProgressMode::Auto;
 };
 
 int runReplay(const ReplayOptions& o) {
@@ -309,7 +301,7 @@ int runReplay(const ReplayOptions& o) {
     raster::TraceResults results;
     results.backend = backend->describe();
     {
-        study::Progress bar("trace replay", trace.listCount(), "command lists", o.progress);
+        Progress bar("trace replay", trace.listCount(), "command lists", o.progress);
         std::function<void(size_t, size_t)> onList;  // empty when hidden: the replay as it was
         if (bar.shown()) onList = [&bar](size_t done, size_t) { bar.update(done); };
         results.results = raster::replayTrace(trace, *backend, onList);
@@ -377,48 +369,6 @@ int runInfo(const InfoOptions& o) {
 
 }  // namespace
 
-void addCullideOptions(CLI::App* sub, OptionText& o) {
-    sub->add_option("--method", o.method,
-                    "original (Cullide: between objects; contacts only where both cover a pixel centre) | modified "
-                    "(self-intersections kept, contacts lost) | reliable (no "
-                    "intersecting triangle is ever pruned; CPU backend only; docs/reliable.md)")
-        ->capture_default_str();
-    sub->add_option("--resolution", o.resolution,
-                    "Viewport: N or WxH pixels (1 to " + std::to_string(kMaxViewportSide) +
-                        " per side), or auto / auto:K: per reducePCS call, pixels sized so that the PCS covers about K "
-                        "500x500 viewports (default 1; docs/cullide.md#adaptive-resolution)")
-        ->capture_default_str();
-    sub->add_option("--depth", o.depth, "Depth format: unorm bits 8..32 (e.g. 24, d16) or float")
-        ->capture_default_str();
-    sub->add_option(
-           "--directions", o.directions,
-           "View directions: 'axes' (+x -x +y -y +z -z), a count N (spread), a list 'x,-y,z' / '1 0 0;0 1 1', "
-           "'pca' (per level, the PCS's principal orientations) or 'coherent' / 'coherent:LIST' (across frames, the "
-           "directions that pruned in the last frame; docs/cullide.md#chosen-directions)")
-        ->capture_default_str();
-    sub->add_option("--hierarchy", o.hierarchy, "connectivity | random")->capture_default_str();
-    sub->add_option("--views", o.views,
-                    "fit (one view per reducePCS call, fitted to the PCS) | clustered (one fitted view per group of "
-                    "nodes whose projections overlap; docs/cullide.md#views-per-cluster)")
-        ->capture_default_str();
-    sub->add_option("--leaf-size", o.leafSize, "Triangles per hierarchy leaf (1 to 1,000,000)")->capture_default_str();
-    sub->add_option("--branching", o.branching, "Children per hierarchy node (2 to 64)")->capture_default_str();
-    sub->add_option("--seed", o.seed, "Seed of the random hierarchy");
-}
-
-void checkCullideOptions(const CLI::App* sub, const OptionText& o) {
-    // An option that does not apply is refused, not ignored.
-    if (sub->count("--seed") && o.hierarchy != "random")
-        throw CLI::ValidationError("--seed", "applies to --hierarchy random only");
-}
-
-void addProgressOption(CLI::App* sub, study::ProgressMode& mode) {
-    sub->add_option_function<std::string>(
-           "--progress", [&mode](const std::string& text) { mode = study::parseProgressMode(text); },
-           "Progress bar on stderr: auto (when stderr is a terminal; the default) | always | never")
-        ->type_name("MODE");
-}
-
 void addTraceRuleOptions(CLI::App* sub, raster::TraceRules& rules) {
     sub->add_option("--subpixel-bits", rules.subpixelBits, "The reference's subpixel bits")
         ->check(CLI::Range(raster::kMinSubpixelBits, raster::kMaxSubpixelBits))
@@ -444,7 +394,7 @@ void addTraceCommand(CLI::App& app, Action& action) {
     rec->add_option("scene", r->scene, "Scene file (.json) or mesh")->required();
     rec->add_option("-o,--out", r->out, "The trace file to write")->required();
     addCullideOptions(rec, r->cullide);
-    rec->add_option("--threads", r->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));
+    addThreadsOption(rec, r->threads);
     rec->add_option("--frame", r->frame, "Record only this frame (default: every frame)")
         ->check(CLI::NonNegativeNumber);
     addTraceRuleOptions(rec, r->rules);
@@ -464,8 +414,7 @@ void addTraceCommand(CLI::App& app, Action& action) {
         ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
     rep->add_option("-o,--out", p->out, "The results file to write (JSON)")->required();
-    rep->add_option("--threads", p->threads, "Worker threads of the CPU backend (0: all cores; 1 to 1024)")
-        ->check(CLI::Range(0, 1024));
+    addThreadsOption(rep, p->threads, "Worker threads of the CPU backend");
     addProgressOption(rep, p->progress);
     rep->callback([p, rep, &action] {
         if (rep->count("--threads") && p->backend != "cpu")

@@ -5,7 +5,7 @@
 #include "cullide/cullide.h"
 #include "cullide/raster/trace.h"
 #include "cullide/scene.h"
-#include "cullide/study/progress.h"
+#include "cullide/pipeline/progress.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -29,7 +29,7 @@ struct Recording {
 // the run for the header. `bar` (optional) counts frames: frame k of the range is step k.
 Recording recordTrace(const Animation& animation, size_t first, size_t last, const CullideOptions& options,
                       const raster::TraceRules& rules, int threads, const std::string& path,
-                      const nlohmann::ordered_json& workload, study::Progress* bar = nullptr);
+                      const nlohmann::ordered_json& workload, Progress* bar = nullptr);
 
 // The run's options as the trace header's "workload".
 nlohmann::ordered_json workloadJson(const std::string& scene, const CullideOptions& options);

@@ -13,7 +13,7 @@
 #include "commands.h"
 
 #include "cullide/error.h"
-#include "cullide/study/progress.h"
+#include "cullide/pipeline/progress.h"
 #include "cullide/study/study.h"
 
 #include <unistd.h>
@@ -108,7 +108,7 @@ struct TuneOptions {
     int threads = 0;
     int repeats = 3;
     std::string out;  // empty: a temporary study output, removed at the end
-    study::ProgressMode progress = study::ProgressMode::Auto;
+    ProgressMode progress = ProgressMode::Auto;
 };
 
 using Choice = std::vector<std::string>;  // one value per axis, in tuneAxes() order
@@ -135,13 +135,13 @@ public:
     }
 
     // Measures every choice of `base` with axis `a` over its candidates (runs only the new ones).
-    std::vector<std::pair<Choice, Measured>> stage(const Choice& base, size_t a, study::Progress& bar,
+    std::vector<std::pair<Choice, Measured>> stage(const Choice& base, size_t a, Progress& bar,
                                                    const std::string& what) {
         const TuneAxis& axis = tuneAxes()[a];
         study::StudyOptions so;
         so.spec = spec(base, a, axis.values);
         so.out = out_;
-        so.progress = study::ProgressMode::Never;  // the tune's bar is the one drawn
+        so.progress = ProgressMode::Never;  // the tune's bar is the one drawn
         size_t runs = 0;
         so.onRecord = [&](const nlohmann::ordered_json&) {
             bar.update(++done_, what + ": " + std::to_string(++runs) + " run(s)");
@@ -259,7 +259,7 @@ int runTune(const TuneOptions& o) {
     for (const TuneAxis& a : axes) current.push_back(a.defaultValue), perRound += a.values.size();
     Tuner tuner(o, out);
     // The bar counts runs against a round's worth per round (later rounds mostly reuse runs).
-    study::Progress bar("tune", perRound * kMaxRounds, "runs", o.progress);
+    Progress bar("tune", perRound * kMaxRounds, "runs", o.progress);
     for (int round = 0; round < kMaxRounds; ++round) {
         bool changed = false;
         for (size_t a = 0; a < axes.size(); ++a) {
@@ -338,7 +338,7 @@ void addTuneCommand(CLI::App& app, Action& action) {
         ->capture_default_str();
     sub->add_option("--budget-ms", o->budgetMs, "Time budget: time to exact pairs at most T ms (default: none)")
         ->check(CLI::Range(1e-6, 1e9));
-    sub->add_option("--threads", o->threads, "Worker threads (0: all cores; 1 to 1024)")->check(CLI::Range(0, 1024));
+    addThreadsOption(sub, o->threads);
     sub->add_option("--repeats", o->repeats, "Timed runs per configuration (median)")
         ->check(CLI::Range(1, 1000))
         ->capture_default_str();

@@ -38,7 +38,7 @@ struct ValidateOptions {
     std::string backend = "gl";
     size_t worst = 10;
     double depthLsb = 2.0;
-    study::ProgressMode progress = study::ProgressMode::Auto;
+    ProgressMode progress = ProgressMode::Auto;
 };
 
 // The recorded trace: kept at --trace, or a scratch file removed when validation ends.
@@ -88,7 +88,7 @@ int runValidate(const ValidateOptions& o) {
         : (std::filesystem::temp_directory_path() / ("cullide-validate-" + std::to_string(::getpid()) + ".trace"))
               .string();
     // One bar per stage, each left on its own line: record, replay, the final PCS.
-    std::optional<study::Progress> bar;
+    std::optional<Progress> bar;
     bar.emplace("validate: record", last - first, "frames", o.progress);
     const Recording recording =
         recordTrace(animation, first, last, options, rules, 0, scratch.path, workloadJson(o.scene, options), &*bar);
@@ -117,15 +117,17 @@ int runValidate(const ValidateOptions& o) {
     stage += name;
     stage += " PCS";
     bar.emplace(stage, last - first, "frames", o.progress);
-    // Coherent directions: the GPU run learns from its own frames, as the recording did from its.
-    CullideOptions gpuOptions = options;
-    if (options.directionMode == DirectionMode::Coherent && last - first > 1)
-        gpuOptions.directionHistory = std::make_shared<DirectionHistory>();
+    // Coherent directions: the GPU run learns from its own frames, as the recording did from its;
+    // each frame builds its hierarchies, as the recording did.
+    PruneSettings gpuSettings;
+    gpuSettings.cullide = options;
+    gpuSettings.reuseHierarchies = false;
+    Pruner gpuPruner(gpuSettings, *gpu, last - first);
     for (size_t f = first; f < last; ++f) {
         const std::vector<PcsTriangle>& ref = recording.pcs[f - first];
-        const CullideResult oth = runCullide(animation.sceneAt(f), *gpu, gpuOptions);
+        const CullideResult oth = gpuPruner.prune(animation.sceneAt(f)).cull;
         bar->update(f - first + 1);
-        const study::Progress::Pause pause(&*bar);  // the frame's line on stdout
+        const Progress::Pause pause(&*bar);  // the frame's line on stdout
         std::vector<PcsTriangle> onlyRef, onlyGl;
         std::set_difference(ref.begin(), ref.end(), oth.pcs.begin(), oth.pcs.end(), std::back_inserter(onlyRef));
         std::set_difference(oth.pcs.begin(), oth.pcs.end(), ref.begin(), ref.end(), std::back_inserter(onlyGl));

@@ -82,6 +82,7 @@ struct DepthFormat {
     static DepthFormat unorm(int n);  // throws InputError("depth format", ...) unless 8 <= n <= 32
     static DepthFormat float32() { return {Kind::Float32, 32}; }
     // Parses "24", "d24", "unorm24", "float", "f32", "d32f" (case-insensitive); throws InputError.
+    // Defined with the other option parsers (options.cpp).
     static DepthFormat parse(const std::string& text);
 
     std::string name() const;  // "D24", "D32F"

@@ -24,6 +24,8 @@ namespace cullide {
 // kMinBranching..kMaxBranching).
 inline constexpr uint32_t kMaxLeafSize = 1'000'000;
 inline constexpr uint32_t kMinBranching = 2, kMaxBranching = 64;
+// Worker threads every command, the study and the Python module accept: 0 (all cores) to kMaxThreads.
+inline constexpr int kMaxThreads = 1024;
 
 // CullideOptions as typed; the defaults give CullideOptions' defaults.
 struct OptionText {
@@ -80,5 +82,13 @@ DirectionMode parseDirectionMode(const std::string& text);
 // Switch to exact: "never", "auto" (with the default cost model: ExactSwitch::exactCost empty), or
 // N, a triangle count 1..10^12 (stop when the PCS holds fewer than N triangles).
 ExactSwitch parseExactSwitch(const std::string& text, const std::string& name = "option --exact-switch");
+
+// A worker-thread count, 0 (all cores) to kMaxThreads; InputError(name, ...) otherwise.
+int checkThreads(long long threads, const std::string& name = "option --threads");
+
+// A depth function by its GL name: never, less, equal, lequal, greater, notequal, gequal, always.
+DepthFunc parseDepthFunc(const std::string& text, const std::string& name = "depth function");
+// An occlusion query's kind: "samples" (SamplesPassed) or "any" (AnySamplesPassed).
+QueryKind parseQueryKind(const std::string& text, const std::string& name = "query kind");
 
 }  // namespace cullide

@@ -130,7 +130,7 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
                 return 0;
             });
         } else if (key == "threads") {
-            s.threads = r.integers<int>(v, key, 0, 1024);
+            s.threads = r.integers<int>(v, key, 0, kMaxThreads);
         } else if (key == "branching") {
             s.branching = uint32_t(r.integer(r.single(v, key), key, kMinBranching, kMaxBranching));
         } else if (key == "seed") {

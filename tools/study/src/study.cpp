@@ -3,7 +3,8 @@
 
 #include "cullide/study/causes.h"
 #include "cullide/study/measures.h"
-#include "cullide/study/progress.h"
+#include "cullide/pipeline/progress.h"
+#include "cullide/pipeline/pruner.h"
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
@@ -20,6 +21,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -158,6 +160,52 @@ Scene loadStudyScene(const std::string& text, uint32_t frame) {
     return a.sceneAt(frame);
 }
 
+namespace {
+
+// The frames a scene string selects: a generated scene's one frame, or a file's "file:K", "file:all"
+// or every frame.
+std::vector<uint32_t> framesOf(const std::string& scene) {
+    if (isGenerated(scene)) return {0};
+    const auto [file, sel] = splitFrame(scene);
+    const size_t count = studyFrameCount(scene);
+    std::vector<uint32_t> frames;
+    if (sel.empty() || sel == "all") {
+        for (uint32_t f = 0; f < count; ++f) frames.push_back(f);
+        return frames;
+    }
+    if (sel.find_first_not_of("0123456789") != std::string::npos || sel.size() > 9 || std::stoul(sel) >= count)
+        throw InputError("scene '" + scene + "'",
+                         "frame '" + sel + "': the file has " + std::to_string(count) + " frame(s)");
+    return {uint32_t(std::stoul(sel))};
+}
+
+// Every combination of the spec's lists for one frame of one scene, appended in the order of the
+// lists (methods, resolutions, depths, directions, views, hierarchies, leaf sizes, exact switches,
+// backends, threads), the last varying fastest. Every list is non-empty.
+void appendCombinations(const Spec& spec, const std::string& scene, uint32_t frame, std::vector<RunConfig>& out) {
+    constexpr size_t kAxes = 10;
+    const std::array<size_t, kAxes> sizes = {spec.methods.size(),     spec.resolutions.size(), spec.depths.size(),
+                                             spec.directions.size(),  spec.views.size(),       spec.hierarchies.size(),
+                                             spec.leafSizes.size(),   spec.exactSwitches.size(), spec.backends.size(),
+                                             spec.threads.size()};
+    std::array<size_t, kAxes> i{};
+    for (;;) {
+        RunConfig c;
+        c.index = out.size();
+        c.scene = scene, c.frame = frame, c.method = spec.methods[i[0]], c.resolution = spec.resolutions[i[1]];
+        c.depth = spec.depths[i[2]], c.directions = spec.directions[i[3]], c.views = spec.views[i[4]];
+        c.hierarchy = spec.hierarchies[i[5]], c.leafSize = spec.leafSizes[i[6]], c.exactSwitch = spec.exactSwitches[i[7]];
+        c.backend = spec.backends[i[8]], c.threads = spec.threads[i[9]];
+        c.branching = spec.branching, c.seed = spec.seed;
+        out.push_back(c);
+        size_t k = kAxes;
+        while (k > 0 && ++i[k - 1] == sizes[k - 1]) i[--k] = 0;
+        if (k == 0) return;
+    }
+}
+
+}  // namespace
+
 std::vector<RunConfig> expand(const Spec& spec) {
     if (spec.scenes.empty()) throw InputError("study spec", "no scenes");
     if (spec.repeats < 1 || spec.repeats > 1000) throw InputError("study spec", "repeats must be 1 to 1000");
@@ -171,46 +219,10 @@ std::vector<RunConfig> expand(const Spec& spec) {
     for (const std::string& b : spec.backends)
         if (!raster::isBackendName(b))
             throw InputError("study spec", "backend '" + b + "': " + raster::backendNameList());
-    for (int t : spec.threads)
-        if (t < 0 || t > 1024) throw InputError("study spec", "threads must be 0 (all) to 1024");
+    for (int t : spec.threads) checkThreads(t, "study spec: threads");
     std::vector<RunConfig> out;
-    for (const std::string& scene : spec.scenes) {
-        std::vector<uint32_t> frames;
-        if (isGenerated(scene)) {
-            frames = {0};
-        } else {
-            const auto [file, sel] = splitFrame(scene);
-            const size_t count = studyFrameCount(scene);
-            if (sel.empty() || sel == "all") {
-                for (uint32_t f = 0; f < count; ++f) frames.push_back(f);
-            } else {
-                if (sel.find_first_not_of("0123456789") != std::string::npos || sel.size() > 9 ||
-                    std::stoul(sel) >= count)
-                    throw InputError("scene '" + scene + "'",
-                                     "frame '" + sel + "': the file has " + std::to_string(count) + " frame(s)");
-                frames = {uint32_t(std::stoul(sel))};
-            }
-        }
-        for (uint32_t frame : frames)
-            for (const auto& m : spec.methods)
-                for (const auto& r : spec.resolutions)
-                    for (const auto& d : spec.depths)
-                        for (const auto& dir : spec.directions)
-                            for (const auto& v : spec.views)
-                                for (const auto& h : spec.hierarchies)
-                                    for (uint32_t leaf : spec.leafSizes)
-                                        for (const auto& x : spec.exactSwitches)
-                                            for (const auto& b : spec.backends)
-                                                for (int t : spec.threads) {
-                                                    RunConfig c;
-                                                    c.index = out.size();
-                                                    c.scene = scene, c.frame = frame, c.method = m, c.resolution = r;
-                                                    c.depth = d, c.directions = dir, c.views = v, c.hierarchy = h;
-                                                    c.leafSize = leaf, c.branching = spec.branching, c.seed = spec.seed;
-                                                    c.backend = b, c.threads = t, c.exactSwitch = x;
-                                                    out.push_back(c);
-                                                }
-    }
+    for (const std::string& scene : spec.scenes)
+        for (uint32_t frame : framesOf(scene)) appendCombinations(spec, scene, frame, out);
     for (const RunConfig& c : out) (void)cullideOptions(c, spec.names);  // every value checked before any run
     return out;
 }
@@ -240,42 +252,6 @@ CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names) {
     return parseCullideOptions(t, names);
 }
 
-std::function<double(size_t)> exactStageCostModel(const Scene& scene) {
-    auto perTriangle = std::make_shared<double>(-1);  // shared by the copies std::function makes
-    return [&scene, perTriangle](size_t n) {
-        if (*perTriangle < 0) {
-            std::vector<std::pair<oracle::TriangleRef, Vec3d>> centroids;
-            for (uint32_t i = 0; i < scene.objects.size(); ++i) {
-                const Mesh m = scene.worldMesh(i);
-                for (uint32_t t = 0; t < m.triangles.size(); ++t) {
-                    Vec3d c = Vec3d::Zero();
-                    for (uint32_t v : m.triangles[t]) c += m.positions[v].cast<double>();
-                    centroids.push_back({{i, t}, c / 3});
-                }
-            }
-            const size_t total = centroids.size(), k = std::min(total, std::max<size_t>(2048, total / 16));
-            if (k == 0) return *perTriangle = 0;
-            Vec3d median;
-            std::vector<double> axis(total);
-            for (int a = 0; a < 3; ++a) {
-                for (size_t i = 0; i < total; ++i) axis[i] = centroids[i].second[a];
-                std::nth_element(axis.begin(), axis.begin() + ptrdiff_t(total / 2), axis.end());
-                median[a] = axis[total / 2];
-            }
-            std::nth_element(centroids.begin(), centroids.begin() + ptrdiff_t(k - 1), centroids.end(),
-                             [&](const auto& a, const auto& b) {
-                                 return (a.second - median).template lpNorm<Eigen::Infinity>() <
-                                     (b.second - median).template lpNorm<Eigen::Infinity>();
-                             });
-            std::vector<oracle::TriangleRef> sample;
-            for (size_t i = 0; i < k; ++i) sample.push_back(centroids[i].first);
-            std::sort(sample.begin(), sample.end());
-            *perTriangle = oracle::exactStage(scene, sample).totalSeconds / double(k);
-        }
-        return double(n) * *perTriangle;
-    };
-}
-
 nlohmann::ordered_json passJson(const PassStats& p, const CullideOptions& options) {
     nlohmann::ordered_json j = {{"level", p.level},
                                 {"direction", p.direction},
@@ -302,16 +278,18 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     std::unique_ptr<tbb::task_arena> arena =
         c.threads > 0 ? std::make_unique<tbb::task_arena>(c.threads) : std::make_unique<tbb::task_arena>();
     std::vector<std::pair<double, CullideResult>> timed;
+    // Which call pruned each triangle, for the attribution of false prunes to explain this very run
+    // (a write per pruned triangle: nothing measurable beside the run).
+    PruneSettings settings;
+    settings.cullide = options;
+    settings.cullide.recordPrunes = truth != nullptr;
     for (int k = 0; k < repeats; ++k) {
         executeIn(*arena, [&] {
-            // Auto: a fresh cost model per run, so that every timed run pays for its calibration.
-            CullideOptions o = options;
-            if (o.exactSwitch.kind == ExactSwitchKind::Auto) o.exactSwitch.exactCost = exactStageCostModel(scene);
-            // Which call pruned each triangle, for the attribution of false prunes to explain this
-            // very run (a write per pruned triangle: nothing measurable beside the run).
-            o.recordPrunes = truth != nullptr;
+            // A Pruner per run: each is a first frame, and auto's cost model is fresh per run, so
+            // that every timed run pays for its calibration.
+            Pruner pruner(settings, backend);
             const auto start = Clock::now();
-            CullideResult r = runCullide(scene, backend, o);
+            CullideResult r = pruner.prune(scene).cull;
             timed.emplace_back(secondsSince(start), std::move(r));
         });
     }

@@ -26,7 +26,7 @@
 #include "cullide/options.h"
 #include "cullide/oracle/oracle.h"
 #include "cullide/scene.h"
-#include "cullide/study/progress.h"
+#include "cullide/pipeline/progress.h"
 
 #include <nlohmann/json.hpp>
 
@@ -109,14 +109,6 @@ size_t studyFrameCount(const std::string& text);
 
 // Options of a configuration (throws InputError on bad values, naming them by `names`).
 CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names = specOptionNames("study spec"));
-
-// The exact stage's cost model for `--exact-switch auto` (ExactSwitch::exactCost): n times the
-// seconds per triangle of the exact stage (oracle::exactStage) on a calibration sample of `scene`,
-// the 1/16 of its triangles (at least 2048, at most all) whose centroids lie nearest, in the max
-// norm, to the coordinate-wise median centroid: a compact patch, as dense as the PCS's leaves.
-// The sample is timed once, at the model's first call, so that a run that switches pays for it
-// inside its own time (and one that never predicts pays nothing). `scene` must outlive the model.
-std::function<double(size_t)> exactStageCostModel(const Scene& scene);
 
 // One reducePCS call's statistics as a record's (and prune --json's) "passes" entry, under
 // `options`: with clustered views also its count of views, with chosen directions (pca,

@@ -20,7 +20,7 @@
 #include <string>
 #include <string_view>
 
-namespace cullide::study {
+namespace cullide {
 
 enum class ProgressMode { Auto, Always, Never };
 
@@ -79,4 +79,4 @@ private:
     std::chrono::steady_clock::time_point start_, last_;
 };
 
-}  // namespace cullide::study
+}  // namespace cullide

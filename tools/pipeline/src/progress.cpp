@@ -1,5 +1,5 @@
 // The progress bar of the long commands (progress.h).
-#include "cullide/study/progress.h"
+#include "cullide/pipeline/progress.h"
 
 #include "cullide/error.h"
 
@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <exception>
 
-namespace cullide::study {
+namespace cullide {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -174,4 +174,4 @@ Progress::Pause::~Pause() {
     progress_->draw();
 }
 
-}  // namespace cullide::study
+}  // namespace cullide

@@ -1,0 +1,60 @@
+// The Python module: studies (study, study_columns).
+#include "types.h"
+
+#include "cullide/raster/backends.h"
+#include "cullide/study/study.h"
+
+#include <pybind11/stl.h>
+
+#include <string>
+#include <vector>
+
+namespace cullide::python {
+
+void bindStudy(py::module_& m) {
+    m.def(
+        "study",
+        [](const std::vector<std::string>& scenes, const std::vector<std::string>& methods,
+           const std::vector<std::string>& resolutions, const std::vector<std::string>& depths,
+           const std::vector<std::string>& directions, const std::vector<std::string>& hierarchies,
+           const std::vector<uint32_t>& leafSizes, const std::vector<std::string>& backends,
+           const std::vector<int>& threads, int repeats, bool oracle, const std::string& out,
+           const std::vector<std::string>& views, const std::vector<std::string>& exactSwitches) {
+            if (scenes.empty()) fail("argument scenes: no scenes");
+            if (repeats < 1) fail("argument repeats: must be >= 1");
+            study::StudyOptions o;
+            study::Spec& s = o.spec;
+            s.names = pythonNames();
+            s.names.resolution = "argument resolutions", s.names.depth = "argument depths";
+            s.names.method = "argument methods", s.names.hierarchy = "argument hierarchies";
+            s.names.leafSize = "argument leaf_sizes";
+            if (views.empty()) fail("argument views: no view modes");
+            s.views = views;
+            s.scenes = scenes, s.methods = methods, s.resolutions = resolutions, s.depths = depths;
+            s.directions = directions, s.hierarchies = hierarchies, s.leafSizes = leafSizes;
+            s.backends = backends, s.threads = threads, s.repeats = repeats, s.oracle = oracle;
+            s.exactSwitches = exactSwitches, s.names.exactSwitch = "argument exact_switches";
+            for (const std::string& b : backends)
+                if (!raster::isBackendName(b))
+                    fail("argument backends: '" + b + "' is not a backend (" + raster::backendNameList() + ")");
+            for (int t : threads) checkedThreads(t);
+            o.out = out;
+            std::vector<std::string> records;
+            o.onRecord = [&](const nlohmann::ordered_json& r) { records.push_back(r.dump()); };
+            {
+                py::gil_scoped_release release;
+                study::runStudy(o);
+            }
+            return records;
+        },
+        py::arg("scenes"), py::arg("methods"), py::arg("resolutions"), py::arg("depths"), py::arg("directions"),
+        py::arg("hierarchies"), py::arg("leaf_sizes"), py::arg("backends"), py::arg("threads"), py::arg("repeats"),
+        py::arg("oracle"), py::arg("out"), py::arg("views") = std::vector<std::string>{"fit"},
+        py::arg("exact_switches") = std::vector<std::string>{"never"},
+        "Runs a study (see the package's study); returns the records as JSON texts.");
+    m.def(
+        "study_columns", [] { return study::columns(); }, "The study CSV's columns, in order.");
+
+}
+
+}  // namespace cullide::python
