@@ -9,8 +9,6 @@
 #include "cullide/study/causes.h"
 #include "cullide/study/measures.h"
 
-#include <pybind11/stl.h>
-
 #include <algorithm>
 #include <vector>
 

@@ -4,8 +4,6 @@
 #include "cullide/depth_backend.h"
 #include "cullide/raster/cpu_backend.h"
 
-#include <pybind11/stl.h>
-
 #include <optional>
 #include <vector>
 

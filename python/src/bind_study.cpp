@@ -4,8 +4,6 @@
 #include "cullide/raster/backends.h"
 #include "cullide/study/study.h"
 
-#include <pybind11/stl.h>
-
 #include <string>
 #include <vector>
 

@@ -7,6 +7,7 @@
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>  // in every part of the module: the same casters everywhere
 
 #include <cstdint>
 #include <cstring>
