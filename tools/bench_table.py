@@ -77,9 +77,13 @@ def fmt(value, unit=""):
     return text + (" " + unit if unit else "")
 
 
-def time_ms(run):
+def ratio(value):
+    return "-" if value is None else fmt(value) + "x"
+
+
+def time_ms(run, which="real_time"):
     scale = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}[run.get("time_unit", "ns")]
-    return run["real_time"] * scale
+    return run[which] * scale
 
 
 def recorded(baseline, name):
@@ -90,33 +94,34 @@ def recorded(baseline, name):
 
 
 def row(what, name, kind, run, runs, baseline):
-    """One table row: what, benchmark, ours, peer, ratio (ours over the peer: above 1 is faster)."""
+    """One table row: what, benchmark, ours, peer, ratio (the peer's time over ours: above 1, ours is faster)."""
     c = run
     counter = baseline.get("counter", "")
     if kind == "gl":
         note = "" if c.get("pcs_equal", 1) == 1 else " (PCS differs!)"
         return [what, name, fmt(c.get("cpu_ms"), "ms"), fmt(c.get("gl_ms"), "ms") + " llvmpipe",
-                fmt(c.get("speedup"), "x") + note]
+                ratio(c.get("speedup")) + note]
     if kind == "cgal":
         return [what, name, fmt(c.get("ours_ms"), "ms"), fmt(c.get("cgal_ms"), "ms") + " CGAL",
-                fmt(c.get("vs_cgal_median"), "x") + " (median of call pairs)"]
+                ratio(c.get("vs_cgal_median")) + " (median of call pairs)"]
     if kind == "hierarchy":
         ours = time_ms(run)
-        ratio = c.get(counter)
+        x = c.get(counter)
         same = c.get(baseline.get("same_counter", ""), 0) == 1
-        peer = fmt(ours * ratio, "ms") + " 0.1.0 build" if ratio else "-"
+        peer = fmt(ours * x, "ms") + " 0.1.0 build" if x else "-"
+        ratio_text = ratio(x)
         return [what, name, fmt(ours, "ms"), peer,
-                fmt(ratio, "x") + ("" if same else " (hierarchy differs!)")]
+                ratio_text + ("" if same else " (hierarchy differs!)")]
     if kind == "tiles":
         tiles = runs.get(name.replace("direct:1", "direct:0"))
         peer = fmt(tiles.get("Mtri/s") / 1e6, "M tris/s") + " tiles" if tiles else "-"
-        return [what, name, fmt(c.get("Mtri/s", 0) / 1e6, "M tris/s"), peer, fmt(c.get("x_tiles"), "x")]
+        return [what, name, fmt(c.get("Mtri/s", 0) / 1e6, "M tris/s"), peer, ratio(c.get("x_tiles"))]
     if kind == "recorded":
-        ours = time_ms(run)
+        ours = time_ms(run, "cpu_time")
         ref = recorded(baseline, name)
-        ratio = c.get(counter)
+        x = c.get(counter)
         peer = f"{fmt(ref['value'], 'ms')} 0.1.0 build (recorded)" if ref else "-"
-        return [what, name, fmt(ours, "ms"), peer, fmt(ratio, "x") + " (recorded)" if ratio else "-"]
+        return [what, name, fmt(ours, "ms"), peer, ratio(x) + " (recorded)" if x else "-"]
     raise ValueError(kind)
 
 
