@@ -26,7 +26,7 @@ END = "<!-- bench_table.py: end -->"
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_BASELINE = os.path.join(HERE, "..", "bench", "baseline.json")
 
-# (what, benchmark name without "/real_time", kind). Kinds say where our figure, the peer's and
+# (what, benchmark name without "/iterations:N" and "/real_time", kind). Kinds say where our figure, the peer's and
 # the ratio come from (see row()).
 ROWS = [
     ("`prune` bunny_through_cow (middle frame), CPU reference vs llvmpipe",
@@ -48,15 +48,15 @@ def filter_regex():
     """The --benchmark_filter that runs the table's rows (and the rows their ratios need)."""
     names = [name for _, name, _ in ROWS]
     names.append("BM_Triangles/leg:1/W:500/threads:1/direct:0")  # x_tiles reads its rate
-    return "^(" + "|".join(re.escape(n) for n in names) + ")(/real_time)?$"
+    return "^(" + "|".join(re.escape(n) for n in names) + ")(/iterations:[0-9]+)?(/real_time)?$"
 
 
 def runs_by_name(report):
-    """name (without /real_time) -> the run to report: the median aggregate if any, else the last."""
+    """name (without /iterations:N and /real_time) -> the run to report: the median aggregate if any, else the last."""
     chosen = {}
     for b in report.get("benchmarks", []):
         name = b.get("run_name", b["name"])
-        name = re.sub(r"/real_time$", "", name)
+        name = re.sub(r"(/iterations:[0-9]+)?(/real_time)?$", "", name)
         if b.get("run_type") == "aggregate":
             if b.get("aggregate_name") == "median":
                 chosen[name] = b
@@ -114,8 +114,8 @@ def row(what, name, kind, run, runs, baseline):
                 ratio_text + ("" if same else " (hierarchy differs!)")]
     if kind == "tiles":
         tiles = runs.get(name.replace("direct:1", "direct:0"))
-        peer = fmt(tiles.get("Mtri/s") / 1e6, "M tris/s") + " tiles" if tiles else "-"
-        return [what, name, fmt(c.get("Mtri/s", 0) / 1e6, "M tris/s"), peer, ratio(c.get("x_tiles"))]
+        peer = fmt(tiles.get("Mtri/s"), "M tris/s") + " tiles" if tiles else "-"  # the counter is in M/s
+        return [what, name, fmt(c.get("Mtri/s"), "M tris/s"), peer, ratio(c.get("x_tiles"))]
     if kind == "recorded":
         ours = time_ms(run, "cpu_time")
         ref = recorded(baseline, name)
@@ -134,10 +134,12 @@ def provenance(report, cpuinfo="/proc/cpuinfo"):
                 if line.startswith("model name"):
                     model = line.split(":", 1)[1].strip()
                     break
+    load = ctx.get("load_avg")
+    load = f", load average {load[0]:.1f} at the start" if load else ""
     return (f"Run of {ctx.get('date', '?')} on host `{ctx.get('host_name', '?')}`: {model}, "
-            f"{ctx.get('num_cpus', '?')} CPUs at {ctx.get('mhz_per_cpu', '?')} MHz; "
+            f"{ctx.get('num_cpus', '?')} CPUs at {ctx.get('mhz_per_cpu', '?')} MHz{load}; "
             f"cullide {ctx.get('cullide_version', '?')} at commit `{ctx.get('git_commit', '?')}`, "
-            f"{ctx.get('compiler', '?')}, {ctx.get('library_build_type', '?')} Google Benchmark.")
+            f"{ctx.get('compiler', '?')}.")
 
 
 def table(report, baseline):
