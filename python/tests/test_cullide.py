@@ -42,9 +42,9 @@ def cli(*args, cwd=None):
     return subprocess.run([exe, *args], cwd=cwd, capture_output=True, text=True, check=True)
 
 
-# Trap: the package must carry the command line's version (0.2.0 from project(VERSION)).
+# Trap: the package must carry the command line's version (0.3.0 from project(VERSION)).
 def test_version_and_data_dir():
-    assert cullide.__version__ == "0.2.0"
+    assert cullide.__version__ == "0.3.0"
     assert os.path.exists(COW)
 
 

@@ -1,5 +1,5 @@
 # The install test (CTest Package.InstallConsumer): installs the build into a temporary prefix, then
-#   1. builds tests/consumer/ against it with find_package(cullide 0.2) and runs it on the installed cow;
+#   1. builds tests/consumer/ against it with find_package(cullide 0.3) and runs it on the installed cow;
 #   2. runs the installed `cullide`: --version is the package's version; make-scene reads the
 #      installed share/cullide/data, and with that mesh removed fails naming the prefix (so the
 #      installed command never falls back to the source tree); plot finds the installed plot.py;
