@@ -11,7 +11,7 @@
 #include "test_util.h"
 #include "window_geometry.h"
 
-#include "../raster/src/depth_simd.h"
+#include "../raster/src/setup/depth_simd.h"
 
 #include <gtest/gtest.h>
 #include <oneapi/tbb/global_control.h>
