@@ -183,8 +183,8 @@ void clearPixels(double depth, size_t p0, size_t p1, const DepthFormat& fmt, con
 
 }  // namespace
 
-void QueryIntervals::Impl::runBands(std::span<const Triangle> triangles, const ListParams& p,
-                                    const PixelState& pixels, CoverageCapture* capture) {
+void QueryIntervals::Impl::runBands(std::span<const Triangle> triangles, const ListParams& p, const PixelState& pixels,
+                                    CoverageCapture* capture) {
     const size_t bands = bandStart.size() - 1;
     parallelFor(0, bands, 1, [&](const tbb::blocked_range<size_t>& rg) {
         for (size_t band = rg.begin(); band != rg.end(); ++band) runBand(band, triangles, p, pixels, capture);

@@ -239,10 +239,14 @@ void QueryIntervals::Impl::setUpRange(uint32_t t, const ListParams& p, const Tri
         return;
     clipped[t] = !(insideGuardBand(a, p.G) && insideGuardBand(b, p.G) && insideGuardBand(c, p.G));
     // Pixel range: the snapped bounding box grown by r units and one pixel.
-    const int64_t minx = std::min({v[0]->sx, v[1]->sx, v[2]->sx}) - r, maxx = std::max({v[0]->sx, v[1]->sx, v[2]->sx}) + r;
-    const int64_t miny = std::min({v[0]->sy, v[1]->sy, v[2]->sy}) - r, maxy = std::max({v[0]->sy, v[1]->sy, v[2]->sy}) + r;
-    const int64_t i0 = std::max<int64_t>(((minx - half) >> S), 0), i1 = std::min<int64_t>(((maxx - half) >> S) + 1, W - 1);
-    const int64_t j0 = std::max<int64_t>(((miny - half) >> S), 0), j1 = std::min<int64_t>(((maxy - half) >> S) + 1, H - 1);
+    const int64_t minx = std::min({v[0]->sx, v[1]->sx, v[2]->sx}) - r,
+                  maxx = std::max({v[0]->sx, v[1]->sx, v[2]->sx}) + r;
+    const int64_t miny = std::min({v[0]->sy, v[1]->sy, v[2]->sy}) - r,
+                  maxy = std::max({v[0]->sy, v[1]->sy, v[2]->sy}) + r;
+    const int64_t i0 = std::max<int64_t>(((minx - half) >> S), 0),
+                  i1 = std::min<int64_t>(((maxx - half) >> S) + 1, W - 1);
+    const int64_t j0 = std::max<int64_t>(((miny - half) >> S), 0),
+                  j1 = std::min<int64_t>(((maxy - half) >> S) + 1, H - 1);
     if (i0 > i1 || j0 > j1) return;
     pr = {int32_t(i0), int32_t(i1), int32_t(j0), int32_t(j1)};
     const int64_t work = (i1 - i0 + 1) + 4;  // pixels per row, plus a share of the setup
