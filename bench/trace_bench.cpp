@@ -1,4 +1,4 @@
-// Benchmarks of traces (raster/src/trace.cpp): what recording and replaying cost over the plain
+// Benchmarks of traces (raster/verify/src/trace_*.cpp): what recording and replaying cost over the plain
 // prune they capture. Compare the three in one run (the machines are noisy):
 //
 //   BM_TraceOverhead/<scene>/<triangles>/<what>/<threads>: one frame of the paper's scenes

@@ -1,4 +1,4 @@
-// Traces (raster/src/trace.cpp, tools/cli/trace.cpp): the format round trip, determinism, every
+// Traces (raster/verify/src/trace_*.cpp, tools/cli/trace.cpp): the format round trip, determinism, every
 // kind of bad input, replay and compare, the independent Python reader.
 #include "cullide/cullide.h"
 #include "cullide/error.h"

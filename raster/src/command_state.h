@@ -1,5 +1,5 @@
 // The GL state a command list walks through, shared by the fast path, the scalar reference path
-// and the validating backend (validate.cpp). Private to raster/.
+// and the interval evaluator (raster/verify/src/query_intervals.cpp). Private to raster/.
 #pragma once
 
 #include "cullide/depth_backend.h"

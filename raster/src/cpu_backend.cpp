@@ -32,15 +32,15 @@
 #include "cullide/error.h"
 #include "cullide/parallel.h"
 
-#include "binning.h"
-#include "conservative.h"
-#include "direct_path.h"
-#include "frag_cache.h"
-#include "records.h"
-#include "reference_path.h"
-#include "tile_kernels.h"
-#include "triangle_setup.h"
-#include "view_cache.h"
+#include "fast/binning.h"
+#include "fast/direct_path.h"
+#include "fast/frag_cache.h"
+#include "fast/records.h"
+#include "fast/tile_kernels.h"
+#include "fast/view_cache.h"
+#include "reference/reference_path.h"
+#include "setup/conservative.h"
+#include "setup/triangle_setup.h"
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/enumerable_thread_specific.h>

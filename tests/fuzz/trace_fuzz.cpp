@@ -1,4 +1,4 @@
-// libFuzzer harness for the trace reader (raster/src/trace.cpp): each input is written as a
+// libFuzzer harness for the trace reader (raster/verify/src/trace_*.cpp): each input is written as a
 // trace file and read the way `cullide trace replay` reads it (the header, every frame's
 // geometry, every command list), then judged against a results file of the right shape. The
 // contract under test: a result or InputError, nothing else. Build and run: see docs/fuzzing.md.

@@ -62,7 +62,7 @@
 //   9. Occlusion queries count the fragments passing the depth test (SAMPLES_PASSED) or report
 //      whether any did (ANY_SAMPLES_PASSED), exactly, independent of the thread count.
 //
-// Conservative mode (the interval buffer of depth_backend.h; raster/src/conservative.h has the
+// Conservative mode (the interval buffer of depth_backend.h; raster/src/setup/conservative.h has the
 // derivations). It shares rules 1 and 3 and the storage formats of rule 7, nothing else:
 //  10. No clipping: a triangle is dropped only when its double bounding box lies entirely beyond
 //      one side of the viewport; z outside [0, 1] is clamped in the interval (monotonic, so two

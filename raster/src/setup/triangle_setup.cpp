@@ -3,10 +3,10 @@
 //
 // References: GL 4.6 §13.5 (clipping), §14.6.1 (polygon rasterization), eq. 14.10 (depth
 // interpolation); Mesa llvmpipe lp_setup_tri.c (snapping, edge functions, float depth plane).
-#include "triangle_setup.h"
+#include "setup/triangle_setup.h"
 
-#include "depth_simd.h"
-#include "snap_lanes.h"
+#include "setup/depth_simd.h"
+#include "setup/snap_lanes.h"
 
 #include "cullide/error.h"
 

@@ -20,10 +20,10 @@
 #pragma once
 
 #include "command_state.h"
-#include "records.h"
-#include "tile_kernels.h"
+#include "fast/records.h"
+#include "fast/tile_kernels.h"
 
-#include "cullide/raster/cpu_backend.h"
+#include "cullide/raster/cpu_options.h"
 
 #include <cstdint>
 #include <span>

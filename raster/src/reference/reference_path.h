@@ -1,10 +1,10 @@
 // The scalar reference path of the CPU backend (see cpu_backend.h). Private to raster/.
 #pragma once
 
-#include "cullide/raster/cpu_backend.h"
+#include "cullide/raster/cpu_options.h"
 #include "command_state.h"
-#include "conservative.h"
-#include "triangle_setup.h"
+#include "setup/conservative.h"
+#include "setup/triangle_setup.h"
 
 #include <span>
 #include <vector>

@@ -1,7 +1,7 @@
 // Triangle records for the fast path of the CPU backend (records.h).
-#include "records.h"
+#include "fast/records.h"
 
-#include "snap_lanes.h"
+#include "setup/snap_lanes.h"
 
 #include "cullide/error.h"
 #include "cullide/parallel.h"

@@ -1,5 +1,5 @@
 // Fragments of the whole geometry under one view, kept across command lists (view_cache.h).
-#include "view_cache.h"
+#include "fast/view_cache.h"
 
 #include "cullide/parallel.h"
 #include "cullide/raster/rules.h"

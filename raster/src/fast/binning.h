@@ -6,7 +6,7 @@
 #include "command_state.h"
 #include "cullide/error.h"
 #include "cullide/parallel.h"
-#include "cullide/raster/cpu_backend.h"
+#include "cullide/raster/cpu_options.h"
 
 #include <oneapi/tbb/blocked_range.h>
 

@@ -5,7 +5,7 @@
 #pragma once
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#include "triangle_setup.h"
+#include "setup/triangle_setup.h"
 
 #include "cullide/mesh.h"
 

@@ -91,7 +91,7 @@ public:
     void releaseScratch();
 
 private:
-    struct Impl;  // the thread arena and per-list scratch (validate.cpp)
+    struct Impl;  // the thread arena and per-list scratch and phases (verify/src/interval_pipeline.h)
     IntervalOptions options_;
     std::unique_ptr<Impl> impl_;
     std::vector<Vec3f> positions_;

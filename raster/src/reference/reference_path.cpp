@@ -2,7 +2,7 @@
 // It shares triangle setup (clipping, snapping, depth plane: triangle_setup.cpp) and the rules of
 // cullide/raster/rules.h with the fast path, and nothing else: coverage is decided here from the
 // snapped vertices directly, E_k(p) = (v[k+1] - v[k]) x (p - v[k]) at every pixel centre p.
-#include "reference_path.h"
+#include "reference/reference_path.h"
 
 #include <algorithm>
 

@@ -1,5 +1,5 @@
 // The direct path of the CPU backend (direct_path.h).
-#include "direct_path.h"
+#include "fast/direct_path.h"
 
 #include "cullide/parallel.h"
 

@@ -3,9 +3,9 @@
 // events. Private to raster/.
 #pragma once
 
-#include "binning.h"
-#include "frag_cache.h"
-#include "records.h"
+#include "fast/binning.h"
+#include "fast/frag_cache.h"
+#include "fast/records.h"
 
 #include <array>
 #include <cstddef>

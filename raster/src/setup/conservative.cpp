@@ -20,7 +20,7 @@
 //   centre; the computed gradients are within gerr of P's, and the computed centre value within
 //   16u(|z0| + |gx dx| + |gy dy|) + gerr * distance of P's (both bounded over the pixel range).
 //   Widening by e_z then contains W(x).z. Clamping to [0, 1] and rounding outwards are monotonic.
-#include "conservative.h"
+#include "setup/conservative.h"
 
 #include <algorithm>
 #include <cmath>

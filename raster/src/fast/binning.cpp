@@ -1,7 +1,7 @@
 // Events and their tiles for the fast path of the CPU backend (binning.h).
-#include "binning.h"
+#include "fast/binning.h"
 
-#include "triangle_setup.h"
+#include "setup/triangle_setup.h"
 
 namespace cullide::raster::detail {
 

@@ -18,11 +18,11 @@
 #pragma once
 
 #include "command_state.h"
-#include "records.h"
-#include "tile_kernels.h"
+#include "fast/records.h"
+#include "fast/tile_kernels.h"
 
 #include "cullide/depth_backend.h"
-#include "cullide/raster/cpu_backend.h"
+#include "cullide/raster/cpu_options.h"
 
 #include <cstddef>
 #include <cstdint>

@@ -1,7 +1,7 @@
 // The per-tile work of the fast path of the CPU backend (tile_kernels.h).
-#include "tile_kernels.h"
+#include "fast/tile_kernels.h"
 
-#include "depth_simd.h"
+#include "setup/depth_simd.h"
 
 #include <algorithm>
 #include <bit>

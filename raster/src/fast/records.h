@@ -3,9 +3,9 @@
 // compacted in triangle order and binned to tiles. Private to raster/.
 #pragma once
 
-#include "binning.h"
-#include "conservative.h"
-#include "triangle_setup.h"
+#include "fast/binning.h"
+#include "setup/conservative.h"
+#include "setup/triangle_setup.h"
 
 #include "cullide/unwritten.h"
 

@@ -16,7 +16,7 @@
 #pragma once
 
 #include "cullide/raster/rules.h"
-#include "triangle_setup.h"
+#include "setup/triangle_setup.h"
 
 #include <cstdint>
 #include <span>
