@@ -13,6 +13,8 @@ install(DIRECTORY core/include/ raster/include/ oracle/include/ tools/study/incl
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(DIRECTORY data/ DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/data)
 install(PROGRAMS tools/plot.py DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/tools)
+install(DIRECTORY tools/plotting DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/tools  # the package plot.py runs
+        FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
 install(PROGRAMS tools/trace/replay_reference.py DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/tools/trace)
 install(FILES LICENSE README.md CHANGELOG.md CITATION.cff DESTINATION ${CMAKE_INSTALL_DOCDIR})
 
