@@ -38,6 +38,8 @@ class CMakeBuild(build_ext):
         shutil.copytree(os.path.join(SOURCE, "data"), os.path.join(share, "data"))
         os.makedirs(os.path.join(share, "tools", "trace"))
         shutil.copy2(os.path.join(SOURCE, "tools", "plot.py"), os.path.join(share, "tools"))
+        shutil.copytree(os.path.join(SOURCE, "tools", "plotting"), os.path.join(share, "tools", "plotting"),
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
         shutil.copy2(os.path.join(SOURCE, "tools", "trace", "replay_reference.py"),
                      os.path.join(share, "tools", "trace"))
 

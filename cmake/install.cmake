@@ -15,6 +15,8 @@ install(DIRECTORY core/include/ raster/include/ raster/verify/include/ oracle/in
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(DIRECTORY data/ DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/data)
 install(PROGRAMS tools/plot.py DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/tools)
+install(DIRECTORY tools/plotting DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/tools  # the package plot.py runs
+        FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
 install(PROGRAMS tools/trace/replay_reference.py DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/tools/trace)
 install(FILES LICENSE README.md CHANGELOG.md CITATION.cff DESTINATION ${CMAKE_INSTALL_DOCDIR})
 
@@ -22,7 +24,7 @@ install(EXPORT cullideTargets NAMESPACE cullide:: DESTINATION ${CULLIDE_CMAKE_DI
 configure_package_config_file(cmake/cullideConfig.cmake.in ${PROJECT_BINARY_DIR}/cullideConfig.cmake
                               INSTALL_DESTINATION ${CULLIDE_CMAKE_DIR}
                               PATH_VARS CMAKE_INSTALL_DATADIR)
-# 0.2 accepts 0.2.x: the API may still change between minor versions before 1.0.
+# 0.3 accepts 0.3.x: the API may still change between minor versions before 1.0.
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/cullideConfigVersion.cmake COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/cullideConfig.cmake ${PROJECT_BINARY_DIR}/cullideConfigVersion.cmake
         DESTINATION ${CULLIDE_CMAKE_DIR})

@@ -81,4 +81,25 @@ void appendFloat(std::string& out, float x);  // %.9g, locale-free
 void appendUint(std::string& out, unsigned long long x);
 void checkIndices(const Mesh& mesh);
 
+// The ascii OFF and PLY bodies: one line "x y z" per vertex.
+inline void appendVertexLines(std::string& out, const Mesh& mesh) {
+    for (const Vec3f& p : mesh.positions) {
+        appendFloat(out, p.x());
+        out += ' ';
+        appendFloat(out, p.y());
+        out += ' ';
+        appendFloat(out, p.z());
+        out += '\n';
+    }
+}
+
+// A triangle as an ascii OFF or PLY face, "3 a b c", without the line's end (PLY may add colours).
+inline void appendTriangleIndices(std::string& out, const Triangle& t) {
+    out += '3';
+    for (uint32_t v : t) {
+        out += ' ';
+        appendUint(out, v);
+    }
+}
+
 }  // namespace cullide::meshio

@@ -139,20 +139,9 @@ void writeOff(const Mesh& mesh, const fs::path& path) {
     out += ' ';
     appendUint(out, mesh.triangles.size());
     out += " 0\n";
-    for (const Vec3f& p : mesh.positions) {
-        appendFloat(out, p.x());
-        out += ' ';
-        appendFloat(out, p.y());
-        out += ' ';
-        appendFloat(out, p.z());
-        out += '\n';
-    }
+    appendVertexLines(out, mesh);
     for (const Triangle& t : mesh.triangles) {
-        out += '3';
-        for (uint32_t v : t) {
-            out += ' ';
-            appendUint(out, v);
-        }
+        appendTriangleIndices(out, t);
         out += '\n';
     }
     writeFileAtomically(path, out);

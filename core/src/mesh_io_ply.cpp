@@ -217,17 +217,68 @@ void appendLe(std::string& out, T value) {
     out.append(reinterpret_cast<const char*>(b), sizeof(T));
 }
 
-}  // namespace
+enum class PlyFormat { None, Ascii, Le, Be };
 
-Mesh readPly(const std::string& src, std::string_view data) {
-    if (onlyWhitespace(data)) throw InputError(src, "empty file");
+struct PlyHeader {
+    PlyFormat format = PlyFormat::None;
+    std::vector<PlyElement> elements;
+    size_t bodyStart = 0;  // the body's first byte
+    size_t endLine = 0;  // end_header's line number
+};
+
+// A "format" line's format.
+PlyFormat plyFormat(const std::string& src, const std::vector<std::string_view>& tok, size_t lineNumber) {
+    if (tok.size() != 3 || tok[2] != "1.0")
+        throw InputError(
+            src,
+            atLine(lineNumber) + "parse error: expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
+    if (tok[1] == "ascii") return PlyFormat::Ascii;
+    if (tok[1] == "binary_little_endian") return PlyFormat::Le;
+    if (tok[1] == "binary_big_endian") return PlyFormat::Be;
+    throw InputError(src, atLine(lineNumber) + "unknown PLY format " + quote(tok[1]));
+}
+
+// An "element" line: a new element, its name not declared before.
+void addPlyElement(const std::string& src, const std::vector<std::string_view>& tok, size_t lineNumber,
+                   std::vector<PlyElement>& elements) {
+    long long count;
+    if (tok.size() != 3 || !parseIntToken(tok[2], count) || count < 0)
+        throw InputError(src, atLine(lineNumber) + "parse error: expected 'element <name> <count>'");
+    for (const PlyElement& e : elements)
+        if (e.name == tok[1])
+            throw InputError(src, atLine(lineNumber) + "element " + quote(tok[1]) + " is declared twice");
+    elements.push_back({std::string(tok[1]), static_cast<unsigned long long>(count), {}});
+}
+
+// A "property" line: a scalar or list property of the last element, its name not declared before.
+void addPlyProperty(const std::string& src, const std::vector<std::string_view>& tok, size_t lineNumber,
+                    std::vector<PlyElement>& elements) {
+    if (elements.empty()) throw InputError(src, atLine(lineNumber) + "parse error: property before any element");
+    PlyProperty p;
+    bool ok;
+    if (tok.size() == 5 && tok[1] == "list") {
+        p.isList = true;
+        ok = plyTypeFromName(tok[2], p.countType) && plyTypeFromName(tok[3], p.type) && plyTypeIsInteger(p.countType);
+        p.name = tok[4];
+    } else {
+        ok = tok.size() == 3 && plyTypeFromName(tok[1], p.type);
+        p.name = tok.size() == 3 ? tok[2] : std::string_view();
+    }
+    if (!ok) throw InputError(src, atLine(lineNumber) + "parse error: bad property declaration");
+    for (const PlyProperty& q : elements.back().properties)
+        if (q.name == p.name)
+            throw InputError(src, atLine(lineNumber) + "property " + quote(p.name) + " is declared twice");
+    elements.back().properties.push_back(p);
+}
+
+// The header, from the "ply" magic line to end_header.
+PlyHeader readPlyHeader(const std::string& src, std::string_view data) {
     LineReader lines(data);
     Line line;
     std::vector<std::string_view> tok;
     if (!lines.next(line) || line.text != "ply")
         throw InputError(src, "parse error: not a PLY file (no 'ply' magic line)");
-    enum class Format { None, Ascii, Le, Be } format = Format::None;
-    std::vector<PlyElement> elements;
+    PlyHeader header;
     bool ended = false;
     while (!ended && lines.next(line)) {
         splitTokens(line.text, tok);
@@ -235,42 +286,11 @@ Mesh readPly(const std::string& src, std::string_view data) {
         const std::string_view kw = tok[0];
         if (kw == "comment" || kw == "obj_info") continue;
         if (kw == "format") {
-            if (tok.size() != 3 || tok[2] != "1.0")
-                throw InputError(
-                    src,
-                    atLine(line.number) +
-                        "parse error: expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
-            if (tok[1] == "ascii") format = Format::Ascii;
-            else if (tok[1] == "binary_little_endian") format = Format::Le;
-            else if (tok[1] == "binary_big_endian") format = Format::Be;
-            else throw InputError(src, atLine(line.number) + "unknown PLY format " + quote(tok[1]));
+            header.format = plyFormat(src, tok, line.number);
         } else if (kw == "element") {
-            long long count;
-            if (tok.size() != 3 || !parseIntToken(tok[2], count) || count < 0)
-                throw InputError(src, atLine(line.number) + "parse error: expected 'element <name> <count>'");
-            for (const PlyElement& e : elements)
-                if (e.name == tok[1])
-                    throw InputError(src, atLine(line.number) + "element " + quote(tok[1]) + " is declared twice");
-            elements.push_back({std::string(tok[1]), static_cast<unsigned long long>(count), {}});
+            addPlyElement(src, tok, line.number, header.elements);
         } else if (kw == "property") {
-            if (elements.empty())
-                throw InputError(src, atLine(line.number) + "parse error: property before any element");
-            PlyProperty p;
-            bool ok;
-            if (tok.size() == 5 && tok[1] == "list") {
-                p.isList = true;
-                ok = plyTypeFromName(tok[2], p.countType) && plyTypeFromName(tok[3], p.type) &&
-                    plyTypeIsInteger(p.countType);
-                p.name = tok[4];
-            } else {
-                ok = tok.size() == 3 && plyTypeFromName(tok[1], p.type);
-                p.name = tok.size() == 3 ? tok[2] : std::string_view();
-            }
-            if (!ok) throw InputError(src, atLine(line.number) + "parse error: bad property declaration");
-            for (const PlyProperty& q : elements.back().properties)
-                if (q.name == p.name)
-                    throw InputError(src, atLine(line.number) + "property " + quote(p.name) + " is declared twice");
-            elements.back().properties.push_back(p);
+            addPlyProperty(src, tok, line.number, header.elements);
         } else if (kw == "end_header") {
             if (tok.size() != 1) throw InputError(src, atLine(line.number) + "parse error: junk after end_header");
             ended = true;
@@ -279,18 +299,28 @@ Mesh readPly(const std::string& src, std::string_view data) {
         }
     }
     if (!ended) throw InputError(src, "parse error: the header has no end_header line (truncated?)");
-    if (format == Format::None) throw InputError(src, "parse error: the header has no format line");
+    if (header.format == PlyFormat::None) throw InputError(src, "parse error: the header has no format line");
+    header.bodyStart = lines.position();
+    header.endLine = line.number;
+    return header;
+}
 
-    // Locate what we need.
+// Where the mesh is in the elements: the vertex element and its x, y, z properties, the face
+// element and its index list.
+struct PlyLayout {
     const PlyElement* vertexEl = nullptr;
     const PlyElement* faceEl = nullptr;
     int px = -1, py = -1, pz = -1, plist = -1;
+};
+
+PlyLayout locateMesh(const std::string& src, const std::vector<PlyElement>& elements) {
+    PlyLayout l;
     for (const PlyElement& e : elements) {
         if (e.name == "vertex") {
-            vertexEl = &e;
+            l.vertexEl = &e;
             for (size_t i = 0; i < e.properties.size(); ++i) {
                 const PlyProperty& p = e.properties[i];
-                int* slot = p.name == "x" ? &px : p.name == "y" ? &py : p.name == "z" ? &pz : nullptr;
+                int* slot = p.name == "x" ? &l.px : p.name == "y" ? &l.py : p.name == "z" ? &l.pz : nullptr;
                 if (slot) {
                     if (p.isList)
                         throw InputError(src, "vertex property " + quote(p.name) + " is a list, expected a scalar");
@@ -298,76 +328,96 @@ Mesh readPly(const std::string& src, std::string_view data) {
                 }
             }
         } else if (e.name == "face") {
-            faceEl = &e;
+            l.faceEl = &e;
             for (size_t i = 0; i < e.properties.size(); ++i) {
                 const PlyProperty& p = e.properties[i];
                 if (p.name == "vertex_indices" || p.name == "vertex_index") {
-                    if (plist >= 0) throw InputError(src, "face element has both vertex_indices and vertex_index");
+                    if (l.plist >= 0) throw InputError(src, "face element has both vertex_indices and vertex_index");
                     if (!p.isList || !plyTypeIsInteger(p.type))
                         throw InputError(src, "face property " + quote(p.name) + " must be a list of integers");
-                    plist = static_cast<int>(i);
+                    l.plist = static_cast<int>(i);
                 }
             }
         }
     }
-    if (!vertexEl) throw InputError(src, "no 'vertex' element");
-    if (px < 0 || py < 0 || pz < 0) throw InputError(src, "the vertex element lacks an x, y or z property");
-    if (!faceEl) throw InputError(src, "no 'face' element (zero triangles)");
-    if (plist < 0) throw InputError(src, "the face element has no vertex_indices list");
-    if (vertexEl->count > kMaxVertices)
-        throw InputError(src, "too many vertices (" + std::to_string(vertexEl->count) + ")");
+    if (!l.vertexEl) throw InputError(src, "no 'vertex' element");
+    if (l.px < 0 || l.py < 0 || l.pz < 0) throw InputError(src, "the vertex element lacks an x, y or z property");
+    if (!l.faceEl) throw InputError(src, "no 'face' element (zero triangles)");
+    if (l.plist < 0) throw InputError(src, "the face element has no vertex_indices list");
+    if (l.vertexEl->count > kMaxVertices)
+        throw InputError(src, "too many vertices (" + std::to_string(l.vertexEl->count) + ")");
+    return l;
+}
 
-    const std::string_view body = data.substr(lines.position());
-    const bool ascii = format == Format::Ascii;
-    PlyBody in(src, body, ascii, format == Format::Be, line.number + 1);
+// One list property of item i: its values read, and when they are a face's indices (`indices`),
+// checked and its fan added to the mesh. `face`: scratch.
+void readPlyList(const std::string& src, PlyBody& in, const PlyProperty& prop, const std::string& what,
+                 unsigned long long i, bool indices, unsigned long long vertexCount, Mesh& mesh,
+                 std::vector<uint32_t>& face) {
+    const PlyValue c = in.read(prop.countType, what + " (list length)");
+    if (c.i < 0) throw InputError(src, what + ": negative list length");
+    if (indices && c.i < 3)
+        throw InputError(
+            src, "face " + std::to_string(i) + " has " + std::to_string(c.i) + " vertices; a face needs at least 3");
+    face.clear();
+    for (long long j = 0; j < c.i; ++j) {
+        const PlyValue v = in.read(prop.type, what);
+        if (!indices) continue;
+        if (v.i < 0)
+            throw InputError(src, "face " + std::to_string(i) + " has a negative vertex index " + std::to_string(v.i));
+        if (static_cast<unsigned long long>(v.i) >= vertexCount)
+            throw InputError(src,
+                             "face " + std::to_string(i) + " refers to vertex " + std::to_string(v.i) +
+                                 ", but the file has only " + std::to_string(vertexCount) +
+                                 " vertices (index out of range)");
+        face.push_back(static_cast<uint32_t>(v.i));
+    }
+    if (indices) addFan(mesh, face.data(), face.size());
+}
+
+// The items of one element: a vertex element's positions and a face element's triangles into the
+// mesh, every other value read past.
+void readPlyElement(const std::string& src, PlyBody& in, const PlyElement& e, const PlyLayout& l, Mesh& mesh,
+                    std::vector<uint32_t>& face) {
+    const bool isVertex = &e == l.vertexEl;
+    const bool isFace = &e == l.faceEl;
+    for (unsigned long long i = 0; i < e.count; ++i) {
+        Vec3f p = Vec3f::Zero();
+        for (size_t k = 0; k < e.properties.size(); ++k) {
+            const PlyProperty& prop = e.properties[k];
+            const std::string what = "element '" + e.name + "' " + std::to_string(i) + ", property '" + prop.name + "'";
+            if (!prop.isList) {
+                const PlyValue v = in.read(prop.type, what);
+                if (isVertex) {
+                    if (static_cast<int>(k) == l.px) p.x() = plyValueAsFloat(v);
+                    if (static_cast<int>(k) == l.py) p.y() = plyValueAsFloat(v);
+                    if (static_cast<int>(k) == l.pz) p.z() = plyValueAsFloat(v);
+                }
+                continue;
+            }
+            const bool indices = isFace && static_cast<int>(k) == l.plist;
+            readPlyList(src, in, prop, what, i, indices, l.vertexEl->count, mesh, face);
+        }
+        if (isVertex) mesh.positions.push_back(p);
+    }
+}
+
+}  // namespace
+
+Mesh readPly(const std::string& src, std::string_view data) {
+    if (onlyWhitespace(data)) throw InputError(src, "empty file");
+    const PlyHeader header = readPlyHeader(src, data);
+    const PlyLayout layout = locateMesh(src, header.elements);
+    const std::string_view body = data.substr(header.bodyStart);
+    const bool ascii = header.format == PlyFormat::Ascii;
+    PlyBody in(src, body, ascii, header.format == PlyFormat::Be, header.endLine + 1);
     Mesh mesh;
     std::vector<uint32_t> face;
-    for (const PlyElement& e : elements) {
-        const bool isVertex = &e == vertexEl;
-        const bool isFace = &e == faceEl;
-        if (isVertex) mesh.positions.reserve(boundedReserve(e.count, body.size(), ascii ? 6 : 3));
-        if (isFace) mesh.triangles.reserve(boundedReserve(e.count, body.size(), ascii ? 8 : 4));
+    for (const PlyElement& e : header.elements) {
+        if (&e == layout.vertexEl) mesh.positions.reserve(boundedReserve(e.count, body.size(), ascii ? 6 : 3));
+        if (&e == layout.faceEl) mesh.triangles.reserve(boundedReserve(e.count, body.size(), ascii ? 8 : 4));
         if (e.properties.empty()) continue;  // nothing to read, whatever the count says
-        for (unsigned long long i = 0; i < e.count; ++i) {
-            Vec3f p = Vec3f::Zero();
-            for (size_t k = 0; k < e.properties.size(); ++k) {
-                const PlyProperty& prop = e.properties[k];
-                const std::string what =
-                    "element '" + e.name + "' " + std::to_string(i) + ", property '" + prop.name + "'";
-                if (!prop.isList) {
-                    const PlyValue v = in.read(prop.type, what);
-                    if (isVertex) {
-                        if (static_cast<int>(k) == px) p.x() = plyValueAsFloat(v);
-                        if (static_cast<int>(k) == py) p.y() = plyValueAsFloat(v);
-                        if (static_cast<int>(k) == pz) p.z() = plyValueAsFloat(v);
-                    }
-                    continue;
-                }
-                const PlyValue c = in.read(prop.countType, what + " (list length)");
-                if (c.i < 0) throw InputError(src, what + ": negative list length");
-                const bool indices = isFace && static_cast<int>(k) == plist;
-                if (indices && c.i < 3)
-                    throw InputError(src,
-                                     "face " + std::to_string(i) + " has " + std::to_string(c.i) +
-                                         " vertices; a face needs at least 3");
-                face.clear();
-                for (long long j = 0; j < c.i; ++j) {
-                    const PlyValue v = in.read(prop.type, what);
-                    if (!indices) continue;
-                    if (v.i < 0)
-                        throw InputError(
-                            src, "face " + std::to_string(i) + " has a negative vertex index " + std::to_string(v.i));
-                    if (static_cast<unsigned long long>(v.i) >= vertexEl->count)
-                        throw InputError(src,
-                                         "face " + std::to_string(i) + " refers to vertex " + std::to_string(v.i) +
-                                             ", but the file has only " + std::to_string(vertexEl->count) +
-                                             " vertices (index out of range)");
-                    face.push_back(static_cast<uint32_t>(v.i));
-                }
-                if (indices) addFan(mesh, face.data(), face.size());
-            }
-            if (isVertex) mesh.positions.push_back(p);
-        }
+        readPlyElement(src, in, e, layout, mesh, face);
     }
     in.finish();
     return mesh;
@@ -407,20 +457,9 @@ void writePly(const Mesh& mesh, const fs::path& path, const PlyWriteOptions& opt
                 for (uint8_t c : options.faceColours[i]) out += static_cast<char>(c);
         }
     } else {
-        for (const Vec3f& p : mesh.positions) {
-            appendFloat(out, p.x());
-            out += ' ';
-            appendFloat(out, p.y());
-            out += ' ';
-            appendFloat(out, p.z());
-            out += '\n';
-        }
+        appendVertexLines(out, mesh);
         for (size_t i = 0; i < mesh.triangles.size(); ++i) {
-            out += '3';
-            for (uint32_t v : mesh.triangles[i]) {
-                out += ' ';
-                appendUint(out, v);
-            }
+            appendTriangleIndices(out, mesh.triangles[i]);
             if (colours)
                 for (uint8_t c : options.faceColours[i]) {
                     out += ' ';

@@ -135,37 +135,48 @@ uint64_t* radixSortHigh(uint64_t* v, uint64_t* tmp, size_t n, int keyBits) {
     return passes % 2 == 1 ? tmp : v;
 }
 
-BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user,
-                            GridScratch& scratch) {
-    BroadPhaseTimes times;
-    auto t0 = std::chrono::steady_clock::now();
-    // Global index g: objects one after another, primitives in order, so that g ascending is
-    // (object, primitive) ascending. One object (self-intersection): its boxes as they are.
-    std::vector<size_t> offset(objects.size() + 1, 0);
-    for (size_t o = 0; o < objects.size(); ++o) offset[o + 1] = offset[o] + objects[o].size();
-    const size_t n = offset.back();
-    if (n == 0) return times;
-    if (n > kIndexMask) throw std::length_error("grid broad phase: more than 2^29 boxes");
-    std::vector<Box> joined;
-    std::vector<uint32_t> objectOf;
-    if (objects.size() > 1) {
-        joined.resize(n);
-        objectOf.resize(n);
-        for (size_t o = 0; o < objects.size(); ++o) {
-            std::copy(objects[o].begin(), objects[o].end(), joined.begin() + std::ptrdiff_t(offset[o]));
-            std::fill(objectOf.begin() + std::ptrdiff_t(offset[o]), objectOf.begin() + std::ptrdiff_t(offset[o + 1]),
-                      uint32_t(o));
+namespace {
+
+// The boxes of every object as one array, by global index g: objects one after another, primitives
+// in order, so that g ascending is (object, primitive) ascending. One object (self-intersection):
+// its boxes as they are.
+struct JoinedBoxes {
+    std::vector<size_t> offset;  // object o's first g
+    std::vector<Box> joined;  // several objects: their boxes one after another
+    std::vector<uint32_t> objectOf;  // several objects: per g, its object
+    std::span<const Box> boxes;
+    size_t n = 0;
+
+    explicit JoinedBoxes(std::span<const std::span<const Box>> objects) : offset(objects.size() + 1, 0) {
+        for (size_t o = 0; o < objects.size(); ++o) offset[o + 1] = offset[o] + objects[o].size();
+        n = offset.back();
+        if (n == 0) return;
+        if (n > kIndexMask) throw std::length_error("grid broad phase: more than 2^29 boxes");
+        if (objects.size() > 1) {
+            joined.resize(n);
+            objectOf.resize(n);
+            for (size_t o = 0; o < objects.size(); ++o) {
+                std::copy(objects[o].begin(), objects[o].end(), joined.begin() + std::ptrdiff_t(offset[o]));
+                std::fill(objectOf.begin() + std::ptrdiff_t(offset[o]),
+                          objectOf.begin() + std::ptrdiff_t(offset[o + 1]), uint32_t(o));
+            }
         }
+        boxes = objects.size() > 1 ? std::span<const Box>(joined) : objects[0];
     }
-    const std::span<const Box> boxes = objects.size() > 1 ? std::span<const Box>(joined) : objects[0];
-    auto candidate = [&](size_t a, size_t b) {  // a < b
+    JoinedBoxes(const JoinedBoxes&) = delete;  // `boxes` may point into `joined`
+    JoinedBoxes& operator=(const JoinedBoxes&) = delete;
+
+    Candidate candidate(size_t a, size_t b) const {  // a < b
         if (objectOf.empty()) return Candidate{0, uint32_t(a), 0, uint32_t(b)};
         const uint32_t oa = objectOf[a], ob = objectOf[b];
         return Candidate{oa, uint32_t(a - offset[oa]), ob, uint32_t(b - offset[ob])};
-    };
+    }
+};
 
-    // The grid: cells about the median box's largest extent; at most 2^32 cells. Bounds per
-    // fixed block, then combined in block order (min/max: the same whatever the threads).
+// The grid: cells about the median box's largest extent; at most 2^32 cells. Bounds per fixed
+// block, then combined in block order (min/max: the same whatever the threads).
+Grid makeGrid(std::span<const Box> boxes, GridScratch& scratch) {
+    const size_t n = boxes.size();
     constexpr size_t kBlock = 16384;
     const size_t blocks = (n + kBlock - 1) / kBlock;
     std::vector<std::array<double, 6>> blockBounds(blocks);
@@ -199,139 +210,145 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
     }
     for (int k = 0; k < 3; ++k) grid.origin[k] = lo[k], grid.dims[k] = uint32_t(std::floor((hi[k] - lo[k]) / size) + 1);
     grid.inv = 1 / size;
-    const uint64_t cellCount = uint64_t(grid.dims[0]) * grid.dims[1] * grid.dims[2];
-    int keyBits = 0;
-    while (keyBits < 32 && (uint64_t(1) << keyBits) < cellCount) ++keyBits;
+    return grid;
+}
 
-    // Entries (key << 32 | low << 29 | g), sorted by key, g ascending within a cell (the pair
-    // loop reports (a, b) with a < b); boxes over too many cells set aside. The first pass of
-    // radixSortHigh (the top digit) is fused with the generation: each fixed block of boxes
-    // counts its entries per top digit, then writes them straight to their slots, so that the
-    // entries take one buffer (8 bytes each), not two plus a per-box offset (25 + 25 + 8 MB on a
-    // 1M-triangle bunny); the lower digits are sorted per bucket with a bucket-sized scratch.
-    // The order is radixSortHigh's on the entries in g order (stable: g ascending per cell).
-    // The top digit: the key's highest 8 bits (so that 256 buckets share the entries, and each
-    // bucket's scratch is small), then lowPasses bytes from bit 32 up for the rest.
+// Calls out(entry) for each entry (cell << 32 | low axes << 29 | g) of box g in order; false
+// (nothing called) when the box is set aside (over kMaxCellsPerBox cells).
+template <typename Out>
+inline bool forEachEntry(const Grid& grid, std::span<const Box> boxes, size_t g, Out&& out) {
+    const Box& b = boxes[g];
+    uint32_t l[3], h[3];
+    uint64_t c = 1;
+    for (int k = 0; k < 3; ++k) {
+        l[k] = grid.cell(b.lo[k], k), h[k] = grid.cell(b.hi[k], k);
+        c *= h[k] - l[k] + 1;
+    }
+    if (c > kMaxCellsPerBox) return false;
+    // Bits 29-31: the axes on which this cell holds the box's lower corner.
+    for (uint32_t x = l[0]; x <= h[0]; ++x)
+        for (uint32_t y = l[1]; y <= h[1]; ++y)
+            for (uint32_t z = l[2]; z <= h[2]; ++z) {
+                const uint64_t low = uint64_t(x == l[0]) | uint64_t(y == l[1]) << 1 | uint64_t(z == l[2]) << 2;
+                out(grid.key(x, y, z) << 32 | low << 29 | g);
+            }
+    return true;
+}
+
+// Few cells (up to kDirectCells; meshes up to ~100k triangles): the entries into scratch.entries,
+// sorted by one counting sort by cell, serial, on the entries generated once (a 6k mesh spent a
+// sixth of its time generating them twice and in the parallel passes' and the 256 buckets' fixed
+// costs). Cells ascending, g ascending within a cell; boxes set aside into `big`.
+void entriesByCounting(const Grid& grid, uint64_t cellCount, std::span<const Box> boxes, GridScratch& scratch,
+                       std::vector<uint32_t>& big) {
+    const size_t n = boxes.size();
+    Buffer<uint64_t>& entryBuffer = scratch.entries;
+    Buffer<uint64_t>& raw = scratch.raw;
+    Buffer<uint32_t>& start = scratch.start;  // cell c's entries from start[c]
+    start.assign(cellCount + 1, 0);
+    // Written through local pointers (push_back reloaded and stored the vector's end for
+    // every entry, which the counters might alias: 1-2% of the oracle on 5.8k-46k
+    // triangles); room for a box's entries is made before each box.
+    raw.clear();
+    raw.resize(4 * n + kMaxCellsPerBox);
+    size_t used = 0;
+    uint64_t* out = raw.data();
+    uint32_t* const counts = start.data() + 1;  // cell c's count at start[c + 1]
+    for (size_t g = 0; g < n; ++g) {
+        if (raw.size() - used < kMaxCellsPerBox) raw.resize(2 * raw.size()), out = raw.data();
+        uint64_t* at = out + used;
+        if (!forEachEntry(grid, boxes, g, [&](uint64_t entry) {
+                *at++ = entry;
+                ++counts[entry >> 32];
+            }))
+            big.push_back(uint32_t(g));
+        used = size_t(at - out);
+    }
+    for (size_t c = 0; c < cellCount; ++c) start[c + 1] += start[c];
+    entryBuffer.resize(used);
+    for (size_t i = 0; i < used; ++i) entryBuffer[start[raw[i] >> 32]++] = raw[i];
+    if (!scratch.keep) {
+        Buffer<uint64_t>().swap(raw);  // the allocators swap too: each frees through its own
+        Buffer<uint32_t>().swap(start);
+    }
+}
+
+// Many cells: the entries into scratch.entries, sorted by key, g ascending within a cell; boxes
+// set aside into `big`. The first pass of radixSortHigh (the top digit) is fused with the
+// generation: each fixed block of boxes counts its entries per top digit, then writes them
+// straight to their slots, so that the entries take one buffer (8 bytes each), not two plus a
+// per-box offset (25 + 25 + 8 MB on a 1M-triangle bunny); the lower digits are sorted per bucket
+// with a bucket-sized scratch. The order is radixSortHigh's on the entries in g order (stable: g
+// ascending per cell). The top digit: the key's highest 8 bits (so that 256 buckets share the
+// entries, and each bucket's scratch is small), then lowPasses bytes from bit 32 up for the rest.
+void entriesByDigits(const Grid& grid, int keyBits, std::span<const Box> boxes, GridScratch& scratch,
+                     std::vector<uint32_t>& big) {
+    const size_t n = boxes.size();
+    Buffer<uint64_t>& entryBuffer = scratch.entries;
     const int top = 32 + std::max(0, keyBits - 8), lowPasses = (top - 32 + 7) / 8;
     constexpr size_t kBoxBlock = 4096;
     const size_t boxBlocks = (n + kBoxBlock - 1) / kBoxBlock;
-    // Calls out(entry) for each entry of box g in order; false (nothing called) when the box is
-    // set aside.
-    auto forEachEntry = [&](size_t g, auto&& out) {
-        const Box& b = boxes[g];
-        uint32_t l[3], h[3];
-        uint64_t c = 1;
-        for (int k = 0; k < 3; ++k) {
-            l[k] = grid.cell(b.lo[k], k), h[k] = grid.cell(b.hi[k], k);
-            c *= h[k] - l[k] + 1;
-        }
-        if (c > kMaxCellsPerBox) return false;
-        // Bits 29-31: the axes on which this cell holds the box's lower corner.
-        for (uint32_t x = l[0]; x <= h[0]; ++x)
-            for (uint32_t y = l[1]; y <= h[1]; ++y)
-                for (uint32_t z = l[2]; z <= h[2]; ++z) {
-                    const uint64_t low = uint64_t(x == l[0]) | uint64_t(y == l[1]) << 1 | uint64_t(z == l[2]) << 2;
-                    out(grid.key(x, y, z) << 32 | low << 29 | g);
-                }
-        return true;
-    };
-    std::vector<uint32_t> big;
-    Buffer<uint64_t>& entryBuffer = scratch.entries;
-    entryBuffer.clear();
-    if (cellCount <= kDirectCells) {
-        // Few cells (meshes up to ~100k triangles): one counting sort by cell, serial, on the
-        // entries generated once (a 6k mesh spent a sixth of its time generating them twice and
-        // in the parallel passes' and the 256 buckets' fixed costs). The same order: cells
-        // ascending, g ascending within a cell.
-        Buffer<uint64_t>& raw = scratch.raw;
-        Buffer<uint32_t>& start = scratch.start;  // cell c's entries from start[c]
-        start.assign(cellCount + 1, 0);
-        // Written through local pointers (push_back reloaded and stored the vector's end for
-        // every entry, which the counters might alias: 1-2% of the oracle on 5.8k-46k
-        // triangles); room for a box's entries is made before each box.
-        raw.clear();
-        raw.resize(4 * n + kMaxCellsPerBox);
-        size_t used = 0;
-        uint64_t* out = raw.data();
-        uint32_t* const counts = start.data() + 1;  // cell c's count at start[c + 1]
-        for (size_t g = 0; g < n; ++g) {
-            if (raw.size() - used < kMaxCellsPerBox) raw.resize(2 * raw.size()), out = raw.data();
-            uint64_t* at = out + used;
-            if (!forEachEntry(g, [&](uint64_t entry) {
-                    *at++ = entry;
-                    ++counts[entry >> 32];
-                }))
-                big.push_back(uint32_t(g));
-            used = size_t(at - out);
-        }
-        for (size_t c = 0; c < cellCount; ++c) start[c + 1] += start[c];
-        entryBuffer.resize(used);
-        for (size_t i = 0; i < used; ++i) entryBuffer[start[raw[i] >> 32]++] = raw[i];
-        if (!scratch.keep) {
-            Buffer<uint64_t>().swap(raw);  // the allocators swap too: each frees through its own
-            Buffer<uint32_t>().swap(start);
-        }
-    } else {
-        std::vector<size_t> slots(boxBlocks * 256, 0);
-        std::vector<std::vector<uint32_t>> blockBig(boxBlocks);
-        parallelForEach(0, boxBlocks, [&](size_t blk) {
-            size_t* c = slots.data() + blk * 256;
-            for (size_t g = blk * kBoxBlock, e = std::min(n, g + kBoxBlock); g < e; ++g)
-                if (!forEachEntry(g, [&](uint64_t entry) { ++c[(entry >> top) & 0xff]; }))
-                    blockBig[blk].push_back(uint32_t(g));
-        });
-        for (const auto& bb : blockBig) big.insert(big.end(), bb.begin(), bb.end());
-        blockBig = {};
-        std::array<size_t, 257> bucket{};
-        const size_t entryCount = digitOffsets(slots, boxBlocks, bucket);
-        // Not value-initialised (every element is written): the parallel loop touches it first.
-        entryBuffer.resize(entryCount);
-        uint64_t* const entries = entryBuffer.data();
-        parallelForEach(0, boxBlocks, [&](size_t blk) {
-            size_t* c = slots.data() + blk * 256;
-            for (size_t g = blk * kBoxBlock, e = std::min(n, g + kBoxBlock); g < e; ++g)
-                forEachEntry(g, [&](uint64_t entry) { entries[c[(entry >> top) & 0xff]++] = entry; });
-        });
-        slots = {};
-        parallelForEach(0, 256, [&](size_t d) {
-            const size_t m = bucket[d + 1] - bucket[d];
-            if (m < 2 || lowPasses == 0) return;
-            std::unique_ptr<uint64_t[]> tmp(new uint64_t[m]);
-            sortBucket(entries + bucket[d], tmp.get(), m, lowPasses);
-            if (lowPasses % 2 == 1) std::copy(tmp.get(), tmp.get() + m, entries + bucket[d]);
-        });
-    }
+    std::vector<size_t> slots(boxBlocks * 256, 0);
+    std::vector<std::vector<uint32_t>> blockBig(boxBlocks);
+    parallelForEach(0, boxBlocks, [&](size_t blk) {
+        size_t* c = slots.data() + blk * 256;
+        for (size_t g = blk * kBoxBlock, e = std::min(n, g + kBoxBlock); g < e; ++g)
+            if (!forEachEntry(grid, boxes, g, [&](uint64_t entry) { ++c[(entry >> top) & 0xff]; }))
+                blockBig[blk].push_back(uint32_t(g));
+    });
+    for (const auto& bb : blockBig) big.insert(big.end(), bb.begin(), bb.end());
+    blockBig = {};
+    std::array<size_t, 257> bucket{};
+    const size_t entryCount = digitOffsets(slots, boxBlocks, bucket);
+    // Not value-initialised (every element is written): the parallel loop touches it first.
+    entryBuffer.resize(entryCount);
+    uint64_t* const entries = entryBuffer.data();
+    parallelForEach(0, boxBlocks, [&](size_t blk) {
+        size_t* c = slots.data() + blk * 256;
+        for (size_t g = blk * kBoxBlock, e = std::min(n, g + kBoxBlock); g < e; ++g)
+            forEachEntry(grid, boxes, g, [&](uint64_t entry) { entries[c[(entry >> top) & 0xff]++] = entry; });
+    });
+    slots = {};
+    parallelForEach(0, 256, [&](size_t d) {
+        const size_t m = bucket[d + 1] - bucket[d];
+        if (m < 2 || lowPasses == 0) return;
+        std::unique_ptr<uint64_t[]> tmp(new uint64_t[m]);
+        sortBucket(entries + bucket[d], tmp.get(), m, lowPasses);
+        if (lowPasses % 2 == 1) std::copy(tmp.get(), tmp.get() + m, entries + bucket[d]);
+    });
+}
+
+// Each cell's boxes are copied next to each other when the cell is tested (in cache), with the
+// axes on which the cell is the box's lower corner's cell: a pair's owner cell (the larger lower
+// cell on each axis, cell() being monotone) is this cell iff on every axis one of the two starts
+// here. The corners as 4 floats each (the 4th 0 in both), so that a pair's six comparisons are
+// two 4-wide ones where SSE is there (the pair loop was a sixth of the oracle on small meshes).
+struct PackedBox {
+    float lo[4], hi[4];
+    uint32_t g, low;  // low: bit k when the box's lower corner is in this cell along k
+};
+
+// Whether a and b overlap (closed boxes).
+inline bool overlapping(const PackedBox& a, const PackedBox& b) {
+#if defined(__SSE__)
+    const __m128 le0 = _mm_cmple_ps(_mm_loadu_ps(a.lo), _mm_loadu_ps(b.hi));
+    const __m128 le1 = _mm_cmple_ps(_mm_loadu_ps(b.lo), _mm_loadu_ps(a.hi));
+    return _mm_movemask_ps(_mm_and_ps(le0, le1)) == 15;
+#else
+    return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) & (b.lo[1] <= a.hi[1]) &
+        (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
+#endif
+}
+
+// Every cell's pairs that the cell owns, to fn in batches. The cells: each fixed block of entries
+// takes the cells that start in it (to their end).
+void testCells(const JoinedBoxes& all, const Buffer<uint64_t>& entryBuffer, CandidateFn fn, void* user) {
     const size_t entryCount = entryBuffer.size();
     const uint64_t* const entries = entryBuffer.data();
-    // The cells: each fixed block of entries takes the cells that start in it (to their end).
+    const std::span<const Box> boxes = all.boxes;
     constexpr size_t kEntryBlock = 2048;
     const size_t entryBlocks = (entryCount + kEntryBlock - 1) / kEntryBlock;
     auto cellStart = [&](size_t i) { return i == 0 || i >= entryCount || entries[i] >> 32 != entries[i - 1] >> 32; };
-
-    // Each cell's boxes are copied next to each other when the cell is tested (in cache), with
-    // the axes on which the cell is the box's lower corner's cell: a pair's owner cell (the
-    // larger lower cell on each axis, cell() being monotone) is this cell iff on every axis one
-    // of the two starts here.
-    // The corners as 4 floats each (the 4th 0 in both), so that a pair's six comparisons are two
-    // 4-wide ones where SSE is there (the pair loop was a sixth of the oracle on small meshes).
-    struct Entry {
-        float lo[4], hi[4];
-        uint32_t g, low;  // low: bit k when the box's lower corner is in this cell along k
-    };
-    // Whether a and b overlap (closed boxes).
-    auto overlapping = [](const Entry& a, const Entry& b) -> bool {
-#if defined(__SSE__)
-        const __m128 le0 = _mm_cmple_ps(_mm_loadu_ps(a.lo), _mm_loadu_ps(b.hi));
-        const __m128 le1 = _mm_cmple_ps(_mm_loadu_ps(b.lo), _mm_loadu_ps(a.hi));
-        return _mm_movemask_ps(_mm_and_ps(le0, le1)) == 15;
-#else
-        return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) & (b.lo[1] <= a.hi[1]) &
-            (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
-#endif
-    };
-    times.buildSeconds = seconds(t0);
-
-    t0 = std::chrono::steady_clock::now();
     parallelFor(0, entryBlocks, 1, [&](const tbb::blocked_range<size_t>& r) {
         // Branch-free inner loop: a pair's test is hard to predict (22-29% pass on the bundled
         // meshes), so every pair is written and the write position advances only on a hit.
@@ -339,11 +356,11 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         std::array<Candidate, kBatch> batch;
         size_t count = 0;
         auto flush = [&] {
-            for (size_t k = 0; k < count; ++k) batch[k] = candidate(hits[k][0], hits[k][1]);
+            for (size_t k = 0; k < count; ++k) batch[k] = all.candidate(hits[k][0], hits[k][1]);
             fn(user, batch.data(), uint32_t(count));
             count = 0;
         };
-        std::vector<Entry> packed;
+        std::vector<PackedBox> packed;
         size_t begin = r.begin() * kEntryBlock;
         const size_t stop = std::min(entryCount, r.end() * kEntryBlock);
         while (begin < stop && !cellStart(begin)) ++begin;
@@ -363,12 +380,12 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
                              uint32_t(entries[cellFirst + i] >> 29) & 7};
             }
             for (size_t i = 0; i + 1 < e; ++i) {
-                const Entry& ea = packed[i];
+                const PackedBox& ea = packed[i];
                 for (size_t from = i + 1; from < e; from += kChunk) {
                     const size_t to = std::min(e, from + kChunk);
                     if (count + (to - from) > kBatch) flush();  // room for every pair of the chunk
                     for (size_t j = from; j < to; ++j) {
-                        const Entry& eb = packed[j];
+                        const PackedBox& eb = packed[j];
                         const bool hit = ((ea.low | eb.low) == 7) & overlapping(ea, eb);
                         hits[count] = {ea.g, eb.g};
                         count += hit;
@@ -378,26 +395,54 @@ BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, Candi
         }
         if (count > 0) flush();
     });
-    // Boxes set aside: against every other box (a pair of two such boxes once).
-    if (!big.empty()) {
-        std::vector<char> isBig(n, 0);
-        for (uint32_t g : big) isBig[g] = 1;
-        parallelFor(0, big.size() * ((n + 4095) / 4096), 1, [&](const tbb::blocked_range<size_t>& r) {
-            std::vector<Candidate> batch;
-            batch.reserve(kBatch);
-            for (size_t job = r.begin(); job != r.end(); ++job) {
-                const uint32_t a = big[job % big.size()];
-                const size_t from = job / big.size() * 4096, to = std::min(n, from + 4096);
-                for (size_t b = from; b < to; ++b) {
-                    if (b == a || (isBig[b] && b < a) || !overlap(boxes[a], boxes[b])) continue;
-                    batch.push_back(a < b ? candidate(a, b) : candidate(b, a));
-                    if (batch.size() == kBatch) fn(user, batch.data(), uint32_t(batch.size())), batch.clear();
-                }
+}
+
+// The boxes set aside: against every other box (a pair of two such boxes once).
+void testSetAside(const JoinedBoxes& all, const std::vector<uint32_t>& big, CandidateFn fn, void* user) {
+    const size_t n = all.n;
+    const std::span<const Box> boxes = all.boxes;
+    std::vector<char> isBig(n, 0);
+    for (uint32_t g : big) isBig[g] = 1;
+    parallelFor(0, big.size() * ((n + 4095) / 4096), 1, [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<Candidate> batch;
+        batch.reserve(kBatch);
+        for (size_t job = r.begin(); job != r.end(); ++job) {
+            const uint32_t a = big[job % big.size()];
+            const size_t from = job / big.size() * 4096, to = std::min(n, from + 4096);
+            for (size_t b = from; b < to; ++b) {
+                if (b == a || (isBig[b] && b < a) || !overlap(boxes[a], boxes[b])) continue;
+                batch.push_back(a < b ? all.candidate(a, b) : all.candidate(b, a));
+                if (batch.size() == kBatch) fn(user, batch.data(), uint32_t(batch.size())), batch.clear();
             }
-            if (!batch.empty()) fn(user, batch.data(), uint32_t(batch.size()));
-        });
-    }
-    if (!scratch.keep) Buffer<uint64_t>().swap(entryBuffer);
+        }
+        if (!batch.empty()) fn(user, batch.data(), uint32_t(batch.size()));
+    });
+}
+
+}  // namespace
+
+BroadPhaseTimes collideGrid(std::span<const std::span<const Box>> objects, CandidateFn fn, void* user,
+                            GridScratch& scratch) {
+    BroadPhaseTimes times;
+    auto t0 = std::chrono::steady_clock::now();
+    const JoinedBoxes all(objects);
+    if (all.n == 0) return times;
+    const Grid grid = makeGrid(all.boxes, scratch);
+    const uint64_t cellCount = uint64_t(grid.dims[0]) * grid.dims[1] * grid.dims[2];
+    int keyBits = 0;
+    while (keyBits < 32 && (uint64_t(1) << keyBits) < cellCount) ++keyBits;
+    // Entries (key << 32 | low << 29 | g), sorted by key, g ascending within a cell (the pair
+    // loop reports (a, b) with a < b); boxes over too many cells set aside.
+    std::vector<uint32_t> big;
+    scratch.entries.clear();
+    if (cellCount <= kDirectCells) entriesByCounting(grid, cellCount, all.boxes, scratch, big);
+    else entriesByDigits(grid, keyBits, all.boxes, scratch, big);
+    times.buildSeconds = seconds(t0);
+
+    t0 = std::chrono::steady_clock::now();
+    testCells(all, scratch.entries, fn, user);
+    if (!big.empty()) testSetAside(all, big, fn, user);
+    if (!scratch.keep) Buffer<uint64_t>().swap(scratch.entries);
     times.collideSeconds = seconds(t0);
     return times;
 }

@@ -215,7 +215,7 @@ Workspace::Impl& Workspace::impl() {
     return *impl_;
 }
 
-// Measured (docs/oracle.md, session 11): on the bench's meshes of 5.8k to 46k triangles the
+// Measured (docs/oracle.md): on the bench's meshes of 5.8k to 46k triangles the
 // Morton order cost more (its sort, and the setup's and grid's reads through the permuted list)
 // than it saved; on bunny75k it still saves a little.
 size_t detail::spatialOrderMin = size_t(1) << 16;
@@ -223,6 +223,181 @@ size_t detail::storedPlanesMax = size_t(1) << 18;
 detail::CallArena detail::callArena = detail::CallArena::WhereAvailable;
 
 namespace {
+
+// Whether a call without a workspace takes its arrays from its own PageArena (detail::callArena).
+bool wantsCallArena() {
+    using detail::CallArena;
+    return detail::callArena == CallArena::Always ||
+        (detail::callArena == CallArena::WhereAvailable && PageArena::available());
+}
+
+// The object's world positions (Scene::worldMesh's arithmetic, without copying the triangles) into
+// `world`: one array for every object, freed after the last (a workspace's kept for the next call).
+void toWorld(const Object& object, Buffer<Vec3f>& world) {
+    const size_t nv = object.mesh.positions.size();
+    world.clear();
+    world.resize(nv);
+    parallelFor(0, nv, 4096, [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t v = r.begin(); v != r.end(); ++v)
+            world[v] = applyTransform(object.transform, object.mesh.positions[v]);
+    });
+}
+
+// Refuses what the oracle cannot decide on: a world coordinate that is not finite or beyond 2^60,
+// a vertex index out of range.
+void checkObject(const Object& object, std::span<const Vec3f> positions) {
+    const std::string name = "object '" + object.name + "'";
+    const std::span<const Triangle> triangles = object.mesh.triangles;
+    const size_t n = triangles.size(), nv = positions.size();
+    for (size_t v = 0; v < nv; ++v)
+        for (int k = 0; k < 3; ++k) {
+            const float x = positions[v][k];
+            if (!std::isfinite(x))
+                throw InputError("scene",
+                                 name + ": vertex " + std::to_string(v) + " has a non-finite world coordinate");
+            if (std::abs(double(x)) > kMaxCoordinate)
+                throw InputError("scene",
+                                 name + ": vertex " + std::to_string(v) +
+                                     " has a world coordinate beyond 2^60, which the oracle cannot decide on");
+        }
+    for (size_t t = 0; t < n; ++t)
+        if (triangles[t][0] >= nv || triangles[t][1] >= nv || triangles[t][2] >= nv)
+            throw InputError("scene", name + ": triangle " + std::to_string(t) + " has a vertex index out of range");
+}
+
+// degen[t]: whether triangle t is degenerate (a repeated index, or collinear corners); each
+// triangle's plane into d.planes[t] with `planesHere`. `only`: which triangles take part (null: all).
+void findDegenerate(ObjectData& d, std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                    const std::vector<char>* only, bool planesHere, std::vector<char>& degen) {
+    const size_t n = triangles.size();
+    degen.assign(n, 0);
+    parallelFor(0, n, 4096, [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t t = r.begin(); t != r.end(); ++t) {
+            if (only && !(*only)[t]) continue;
+            const Triangle& tri = triangles[t];  // the file's indices: a repeat is degenerate
+            const Vec3f &p0 = positions[tri[0]], &p1 = positions[tri[1]], &p2 = positions[tri[2]];
+            const detail::Plane plane = detail::planeOf(p0, p1, p2);
+            if (planesHere) d.planes[t] = plane;
+            degen[t] = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] ||
+                (!detail::certainlyNotCollinear(plane) &&
+                 collinear(p0.cast<double>(), p1.cast<double>(), p2.cast<double>()));
+        }
+    });
+}
+
+// The primitives' triangles into `kept` (ascending), the degenerate ones into truth.degenerate.
+void keepTriangles(size_t o, const std::vector<char>* only, const std::vector<char>& degen, Buffer<uint32_t>& kept,
+                   Truth& truth) {
+    const size_t n = degen.size();
+    kept.clear();
+    kept.reserve(n);
+    for (size_t t = 0; t < n; ++t) {
+        if (only && !(*only)[t]) continue;
+        if (degen[t]) truth.degenerate.push_back({uint32_t(o), uint32_t(t)});
+        else kept.push_back(uint32_t(t));
+    }
+}
+
+// The primitive records of the kept triangles, in kept's order, and their planes when stored
+// (those of findDegenerate moved into primitive order with `planesHere`, else computed here).
+void buildPrims(ObjectData& d, std::span<const Vec3f> positions, std::span<const Triangle> triangles,
+                const Buffer<uint32_t>& kept, const std::vector<uint32_t>& vertexId, bool storedPlanes,
+                bool planesHere) {
+    const size_t n = triangles.size();
+    if (planesHere && kept.size() < n) {  // in primitive order (kept[i] >= i: forward, in place)
+        for (size_t i = 0; i < kept.size(); ++i) d.planes[i] = d.planes[kept[i]];
+        d.planes.resize(kept.size());
+    }
+    d.prims.resize(kept.size());
+    if (storedPlanes && !planesHere) d.planes.resize(kept.size());
+    parallelFor(0, kept.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            const uint32_t t = kept[i];
+            const Triangle& tri = triangles[t];
+            Prim& prim = d.prims[i];
+            for (int k = 0; k < 3; ++k) {
+                for (int c = 0; c < 3; ++c) prim.p[k][c] = positions[tri[k]][c];
+                prim.v[k] = vertexId.empty() ? tri[k] : vertexId[tri[k]];
+            }
+            prim.triangle = t;
+            const Vec3f &p0 = positions[tri[0]], &p1 = positions[tri[1]], &p2 = positions[tri[2]];
+            if (storedPlanes && !planesHere) d.planes[i] = detail::planeOf(p0, p1, p2);
+            prim.turns = detail::projectedTurns(p0, p1, p2, storedPlanes ? d.planes[i] : detail::planeOf(p0, p1, p2));
+        }
+    });
+}
+
+// Object o's primitive records (ctx.objects[o]): its world positions checked, its degenerate
+// triangles into truth, the others' records in spatial order on large meshes. `degen` and `kept`:
+// arrays reused from one object to the next.
+void setupObject(Context& ctx, size_t o, const Object& object, const OracleOptions& options,
+                 const std::vector<char>* only, Workspace::Impl& mem, std::vector<char>& degen, Buffer<uint32_t>& kept,
+                 Truth& truth) {
+    const std::span<const Triangle> triangles = object.mesh.triangles;
+    const size_t n = triangles.size();
+    toWorld(object, mem.world);
+    const std::span<const Vec3f> positions = mem.world;
+    checkObject(object, positions);
+
+    ObjectData& d = ctx.objects[o];
+    std::vector<uint32_t> vertexId;  // the vertex each index stands for in the sharing rules
+    if (options.weldByPosition) vertexId = weldMap(positions);
+    // The planes, whose products decide most triangles' degeneracy (collinear()'s filter), are
+    // kept from this pass, per triangle, when they are stored and the primitives keep the
+    // triangles' order (no spatial order): computed twice, they cost the cow's setup 0.30
+    // against 0.28 ms (eight alternated runs of 200 calls, the medians).
+    // clear() first: a longer array is allocated anew, not copied from the shorter one.
+    const bool planesHere = ctx.storedPlanes && n <= detail::spatialOrderMin;
+    d.prims.clear(), d.boxes.clear(), d.planes.clear();
+    if (planesHere) d.planes.resize(n);
+    findDegenerate(d, positions, triangles, only, planesHere, degen);
+    keepTriangles(o, only, degen, kept, truth);
+    if (kept.size() > detail::spatialOrderMin) spatialOrder(positions, triangles, kept);
+    buildPrims(d, positions, triangles, kept, vertexId, ctx.storedPlanes, planesHere);
+    truth.trianglesTested += d.prims.size();
+}
+
+// The object's fans (detail::certifyFans), then its primitives' boxes from the records.
+void fansAndBoxes(ObjectData& d, size_t vertexCount, PageArena* arena) {
+    detail::certifyFans(d.prims, vertexCount, arena);
+    d.boxes.resize(d.prims.size());
+    parallelFor(0, d.prims.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            const detail::Prim& prim = d.prims[i];
+            Box& b = d.boxes[i];
+            for (int k = 0; k < 3; ++k) {
+                const float a = prim.p[0][k], bb = prim.p[1][k], c = prim.p[2][k];
+                // Float corners: the exact box is a float box; one ulp outward keeps boxes
+                // that only touch overlapping, whatever Embree's comparisons.
+                b.lo[k] = detail::roundDown(std::min({a, bb, c}));
+                b.hi[k] = detail::roundUp(std::max({a, bb, c}));
+            }
+        }
+    });
+}
+
+// The broad phase (options.broadPhase) over every object's boxes, the narrow phase on its
+// candidates into the threads' locals.
+void broadAndNarrowPhase(Context& ctx, const OracleOptions& options, detail::GridScratch& grid, Truth& truth) {
+    if (ctx.storedPlanes)
+        for (const ObjectData& d : ctx.objects) ctx.stored.push_back({d.prims.data(), d.planes.data()});
+    std::vector<std::span<const Box>> boxes(ctx.objects.size());
+    for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = ctx.objects[o].boxes;
+    const detail::BroadPhaseTimes bt = options.broadPhase == BroadPhase::Embree
+        ? detail::collideAll(boxes, narrowPhase, &ctx)
+        : detail::collideGrid(boxes, narrowPhase, &ctx, grid);
+    truth.buildSeconds = bt.buildSeconds;
+    truth.collideSeconds = bt.collideSeconds;
+}
+
+// The threads' pairs and candidate counts into truth, the pairs sorted.
+void mergePairs(const Context& ctx, Truth& truth) {
+    size_t total = 0;
+    for (const Local& l : ctx.locals) total += l.pairs.size(), truth.candidatePairs += l.candidates;
+    truth.pairs.reserve(total);
+    for (const Local& l : ctx.locals) truth.pairs.insert(truth.pairs.end(), l.pairs.begin(), l.pairs.end());
+    std::sort(truth.pairs.begin(), truth.pairs.end());
+}
 
 // `subset`: per object, which triangles take part (null: all).
 Truth run(const Scene& scene, const OracleOptions& options, const std::vector<std::vector<char>>* subset,
@@ -233,11 +408,7 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
     // (cullide/unwritten.h's PageArena: fresh 4 KiB pages were half of a 23k-triangle call's time
     // when malloc had given its memory back); each large one freed as soon as it is no longer needed.
     std::optional<PageArena> arena;
-    using detail::CallArena;
-    if (!workspace &&
-        (detail::callArena == CallArena::Always ||
-         (detail::callArena == CallArena::WhereAvailable && PageArena::available())))
-        arena.emplace();
+    if (!workspace && wantsCallArena()) arena.emplace();
     Workspace::Impl own(arena ? &*arena : nullptr);
     Workspace::Impl& mem = workspace ? workspace->impl() : own;
     Context ctx{mem.objects, false, {}, {}};
@@ -248,93 +419,8 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
     ctx.storedPlanes = allTriangles <= detail::storedPlanesMax;
     std::vector<char> degen;  // per object, in turn
     Buffer<uint32_t> kept(ArenaAllocator<uint32_t>(mem.arena));  // per object, in turn
-    for (size_t o = 0; o < scene.objects.size(); ++o) {
-        const Object& object = scene.objects[o];
-        const std::string name = "object '" + object.name + "'";
-        const std::span<const Triangle> triangles = object.mesh.triangles;
-        const size_t n = triangles.size(), nv = object.mesh.positions.size();
-        // World positions (Scene::worldMesh's arithmetic, without copying the triangles): one
-        // array for every object, freed after the last (a workspace's kept for the next call).
-        Buffer<Vec3f>& world = mem.world;
-        world.clear();
-        world.resize(nv);
-        parallelFor(0, nv, 4096, [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t v = r.begin(); v != r.end(); ++v)
-                world[v] = applyTransform(object.transform, object.mesh.positions[v]);
-        });
-        const std::span<const Vec3f> positions = world;
-        for (size_t v = 0; v < nv; ++v)
-            for (int k = 0; k < 3; ++k) {
-                const float x = positions[v][k];
-                if (!std::isfinite(x))
-                    throw InputError("scene",
-                                     name + ": vertex " + std::to_string(v) + " has a non-finite world coordinate");
-                if (std::abs(double(x)) > kMaxCoordinate)
-                    throw InputError("scene",
-                                     name + ": vertex " + std::to_string(v) +
-                                         " has a world coordinate beyond 2^60, which the oracle cannot decide on");
-            }
-        for (size_t t = 0; t < n; ++t)
-            if (triangles[t][0] >= nv || triangles[t][1] >= nv || triangles[t][2] >= nv)
-                throw InputError("scene",
-                                 name + ": triangle " + std::to_string(t) + " has a vertex index out of range");
-
-        ObjectData& d = ctx.objects[o];
-        std::vector<uint32_t> vertexId;  // the vertex each index stands for in the sharing rules
-        if (options.weldByPosition) vertexId = weldMap(positions);
-        degen.assign(n, 0);
-        // The planes, whose products decide most triangles' degeneracy (collinear()'s filter), are
-        // kept from this pass, per triangle, when they are stored and the primitives keep the
-        // triangles' order (no spatial order): computed twice, they cost the cow's setup 0.30
-        // against 0.28 ms (eight alternated runs of 200 calls, the medians).
-        // clear() first: a longer array is allocated anew, not copied from the shorter one.
-        const bool planesHere = ctx.storedPlanes && n <= detail::spatialOrderMin;
-        d.prims.clear(), d.boxes.clear(), d.planes.clear();
-        if (planesHere) d.planes.resize(n);
-        parallelFor(0, n, 4096, [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t t = r.begin(); t != r.end(); ++t) {
-                if (subset && !(*subset)[o][t]) continue;
-                const Triangle& tri = triangles[t];  // the file's indices: a repeat is degenerate
-                const Vec3f &p0 = positions[tri[0]], &p1 = positions[tri[1]], &p2 = positions[tri[2]];
-                const detail::Plane plane = detail::planeOf(p0, p1, p2);
-                if (planesHere) d.planes[t] = plane;
-                degen[t] = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] ||
-                    (!detail::certainlyNotCollinear(plane) &&
-                     collinear(p0.cast<double>(), p1.cast<double>(), p2.cast<double>()));
-            }
-        });
-        kept.clear();  // the primitives' triangles
-        kept.reserve(n);
-        for (size_t t = 0; t < n; ++t) {
-            if (subset && !(*subset)[o][t]) continue;
-            if (degen[t]) truth.degenerate.push_back({uint32_t(o), uint32_t(t)});
-            else kept.push_back(uint32_t(t));
-        }
-        if (kept.size() > detail::spatialOrderMin) spatialOrder(positions, triangles, kept);
-        if (planesHere && kept.size() < n) {  // in primitive order (kept[i] >= i: forward, in place)
-            for (size_t i = 0; i < kept.size(); ++i) d.planes[i] = d.planes[kept[i]];
-            d.planes.resize(kept.size());
-        }
-        d.prims.resize(kept.size());
-        if (ctx.storedPlanes && !planesHere) d.planes.resize(kept.size());
-        parallelFor(0, kept.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t i = r.begin(); i != r.end(); ++i) {
-                const uint32_t t = kept[i];
-                const Triangle& tri = triangles[t];
-                Prim& prim = d.prims[i];
-                for (int k = 0; k < 3; ++k) {
-                    for (int c = 0; c < 3; ++c) prim.p[k][c] = positions[tri[k]][c];
-                    prim.v[k] = vertexId.empty() ? tri[k] : vertexId[tri[k]];
-                }
-                prim.triangle = t;
-                const Vec3f &p0 = positions[tri[0]], &p1 = positions[tri[1]], &p2 = positions[tri[2]];
-                if (ctx.storedPlanes && !planesHere) d.planes[i] = detail::planeOf(p0, p1, p2);
-                prim.turns =
-                    detail::projectedTurns(p0, p1, p2, ctx.storedPlanes ? d.planes[i] : detail::planeOf(p0, p1, p2));
-            }
-        });
-        truth.trianglesTested += d.prims.size();
-    }
+    for (size_t o = 0; o < scene.objects.size(); ++o)
+        setupObject(ctx, o, scene.objects[o], options, subset ? &(*subset)[o] : nullptr, mem, degen, kept, truth);
     // Freed (the allocators swap with the storage: each array goes back through its own).
     Buffer<uint32_t>().swap(kept);
     std::vector<char>().swap(degen);
@@ -346,42 +432,14 @@ Truth run(const Scene& scene, const OracleOptions& options, const std::vector<st
     // The fans, then the boxes from the records, once those arrays are gone: the fans' scratch (4
     // bytes a corner) is never live beside them or the boxes (the 1M bunny's peak: docs/oracle.md,
     // "Fans").
-    for (size_t o = 0; o < scene.objects.size(); ++o) {
-        ObjectData& d = ctx.objects[o];
-        detail::certifyFans(d.prims, scene.objects[o].mesh.positions.size(), mem.arena);
-        d.boxes.resize(d.prims.size());
-        parallelFor(0, d.prims.size(), 4096, [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t i = r.begin(); i != r.end(); ++i) {
-                const detail::Prim& prim = d.prims[i];
-                Box& b = d.boxes[i];
-                for (int k = 0; k < 3; ++k) {
-                    const float a = prim.p[0][k], bb = prim.p[1][k], c = prim.p[2][k];
-                    // Float corners: the exact box is a float box; one ulp outward keeps boxes
-                    // that only touch overlapping, whatever Embree's comparisons.
-                    b.lo[k] = detail::roundDown(std::min({a, bb, c}));
-                    b.hi[k] = detail::roundUp(std::max({a, bb, c}));
-                }
-            }
-        });
-    }
+    for (size_t o = 0; o < scene.objects.size(); ++o)
+        fansAndBoxes(ctx.objects[o], scene.objects[o].mesh.positions.size(), mem.arena);
     truth.setupSeconds = since(t0);
 
-    if (ctx.storedPlanes)
-        for (const ObjectData& d : ctx.objects) ctx.stored.push_back({d.prims.data(), d.planes.data()});
-    std::vector<std::span<const Box>> boxes(ctx.objects.size());
-    for (size_t o = 0; o < ctx.objects.size(); ++o) boxes[o] = ctx.objects[o].boxes;
-    const detail::BroadPhaseTimes bt = options.broadPhase == BroadPhase::Embree
-        ? detail::collideAll(boxes, narrowPhase, &ctx)
-        : detail::collideGrid(boxes, narrowPhase, &ctx, mem.grid);
-    truth.buildSeconds = bt.buildSeconds;
-    truth.collideSeconds = bt.collideSeconds;
+    broadAndNarrowPhase(ctx, options, mem.grid, truth);
 
     const auto t1 = Clock::now();
-    size_t total = 0;
-    for (const Local& l : ctx.locals) total += l.pairs.size(), truth.candidatePairs += l.candidates;
-    truth.pairs.reserve(total);
-    for (const Local& l : ctx.locals) truth.pairs.insert(truth.pairs.end(), l.pairs.begin(), l.pairs.end());
-    std::sort(truth.pairs.begin(), truth.pairs.end());
+    mergePairs(ctx, truth);
     truth.sortSeconds = since(t1);
     truth.totalSeconds = since(t0);
     return truth;

@@ -1,0 +1,194 @@
+// `cullide report`, run as a user runs it: one self-contained, well-formed page, rendered by a
+// browser.
+#include "cli_test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <tbb/info.h>
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <array>
+#include <unistd.h>
+#include <vector>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using namespace cullide::test::cli;
+
+namespace {
+
+bool haveMatplotlib() {
+    return std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") == 0;
+}
+
+// The report of a small mixed study (one single-object scene, one of three objects; two methods,
+// two resolutions), made once for the report tests: its folder, or empty when `cullide report`
+// failed (the first test to use it says how).
+struct ReportRun {
+    fs::path dir;
+    CliRun study, report;
+};
+const ReportRun& smallReport() {
+    static const ReportRun run = [] {
+        ReportRun r;
+        r.dir = freshDir("report");
+        const std::string csv = quote((r.dir / "s.csv").string());
+        r.study = runCli("study --scenes bunny:1500 " + quote(kData + "/scenes/two_cows_and_bunny.json") +
+                         " --methods original modified --resolutions 32 64 --repeats 1 -q -o " + csv);
+        r.report = runCli("report " + csv + " -o " + quote((r.dir / "page").string()));
+        return r;
+    }();
+    return run;
+}
+
+// The elements of an HTML page, checked for balance: every element closed in order (void elements
+// excepted), text without a stray '<'. Returns "" or the first problem.
+std::string checkWellFormed(const std::string& html) {
+    static const std::vector<std::string> voids = {"meta", "img", "br", "hr", "link", "input", "col", "wbr"};
+    std::vector<std::string> open;
+    size_t i = 0;
+    while ((i = html.find('<', i)) != std::string::npos) {
+        const size_t end = html.find('>', i);
+        if (end == std::string::npos) return "a tag without its '>' at " + std::to_string(i);
+        const std::string tag = html.substr(i + 1, end - i - 1);
+        i = end + 1;
+        if (tag.empty() || tag[0] == '!') continue;  // <!DOCTYPE html>
+        const bool closing = tag[0] == '/';
+        const size_t nameStart = closing ? 1 : 0;
+        size_t nameEnd = tag.find_first_of(" \t\n/", nameStart);
+        if (nameEnd == std::string::npos) nameEnd = tag.size();
+        std::string name = tag.substr(nameStart, nameEnd - nameStart);
+        if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0])))
+            return "'<' in text: <" + tag.substr(0, 20);
+        if (closing) {
+            if (open.empty() || open.back() != name)
+                return "</" + name + "> closes <" + (open.empty() ? std::string("nothing") : open.back()) + ">";
+            open.pop_back();
+        } else if (std::find(voids.begin(), voids.end(), name) == voids.end() && tag.back() != '/') {
+            open.push_back(name);
+        }
+        // The text of <style> is not markup.
+        if (!closing && name == "style") {
+            const size_t close = html.find("</style>", i);
+            if (close == std::string::npos) return "<style> not closed";
+            i = close;
+        }
+    }
+    if (!open.empty()) return "<" + open.back() + "> not closed";
+    return "";
+}
+
+// The values of attribute `attr` in every tag that has it. (Not std::regex: libstdc++'s recursion
+// overflows the stack on a value as long as a chart's base64.)
+std::vector<std::string> attributeValues(const std::string& html, const std::string& attr) {
+    std::vector<std::string> out;
+    const std::string key = attr + "=\"";
+    for (size_t i = html.find(key); i != std::string::npos; i = html.find(key, i + 1)) {
+        if (i == 0 || !std::isspace(static_cast<unsigned char>(html[i - 1]))) continue;
+        const size_t start = i + key.size(), end = html.find('"', start);
+        if (end == std::string::npos) break;
+        out.push_back(html.substr(start, end - start));
+    }
+    return out;
+}
+
+size_t countOf(const std::string& text, const std::string& what) {
+    size_t n = 0;
+    for (size_t i = text.find(what); i != std::string::npos; i = text.find(what, i + 1)) ++n;
+    return n;
+}
+
+}  // namespace
+
+// `cullide report`: one page with nothing outside it, well-formed, with a Pareto table per scene,
+// the provenance (this build's commit) and the command that made the data. Traps: a chart linked
+// as a file beside the page (lost when the page is mailed), a script or stylesheet from the web,
+// a table for one scene only, an unescaped '<' or a quote in a path breaking the markup.
+TEST(Cli, ReportIsOneSelfContainedPage) {
+    if (!haveMatplotlib()) GTEST_SKIP() << "no matplotlib for /usr/bin/python3";
+    const ReportRun& run = smallReport();
+    ASSERT_EQ(run.study.status, 0) << run.study.output;
+    ASSERT_EQ(run.report.status, 0) << run.report.output;
+    const std::string html = readAll(run.dir / "page" / "report.html");
+    ASSERT_FALSE(html.empty());
+    EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+    EXPECT_EQ(checkWellFormed(html), "");
+
+    const std::vector<std::string> images = attributeValues(html, "src");
+    EXPECT_GE(images.size(), 3u) << "speed against accuracy, false prunes by cause, per-call charts";
+    for (const std::string& src : images) EXPECT_EQ(src.rfind("data:image/png;base64,", 0), 0u) << src.substr(0, 60);
+    for (const std::string& href : attributeValues(html, "href")) EXPECT_EQ(href.rfind('#', 0), 0u) << href;
+    for (const char* external : {"<script", "<link", "<iframe", "<object", "<embed", "url("})
+        EXPECT_EQ(html.find(external), std::string::npos) << external;
+
+    const std::vector<std::string> scenes = attributeValues(html, "data-scene");
+    ASSERT_EQ(scenes.size(), 2u) << "one Pareto table per scene";
+    EXPECT_EQ(scenes[0], "bunny:1500");
+    EXPECT_EQ(scenes[1], kData + "/scenes/two_cows_and_bunny.json");
+    EXPECT_EQ(countOf(html, "<table class=\"pareto\""), 2u);
+
+    const CliRun v = runCli("--version");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(v.output, m, std::regex(R"(\(commit ([^;]+);)"))) << v.output;
+    EXPECT_NE(html.find("<td>" + m[1].str() + "</td>"), std::string::npos) << "the provenance names the commit";
+    EXPECT_NE(html.find("<pre class=\"command\">cullide study --scenes bunny:1500 "), std::string::npos)
+        << "the command that made the data";
+
+    // Not a study: refused by name, nothing written.
+    const fs::path d = freshDir("report_bad");
+    { std::ofstream(d / "sweep.csv") << "sweep,method\npenetration,modified\n"; }
+    CliRun bad = runCli("report " + quote((d / "sweep.csv").string()) + " -o " + quote((d / "page").string()));
+    EXPECT_EQ(bad.status, 2) << bad.output;
+    EXPECT_NE(bad.output.find("sweep.csv"), std::string::npos) << bad.output;
+    bad = runCli("report " + quote((d / "missing.csv").string()) + " -o " + quote((d / "page").string()));
+    EXPECT_EQ(bad.status, 2) << bad.output;
+    EXPECT_NE(bad.output.find("missing.csv: no such file"), std::string::npos) << bad.output;
+    EXPECT_FALSE(fs::exists(d / "page" / "report.html"));
+}
+
+// The report renders in a browser: headless Chromium (Debian's `chromium`) reads the page into a
+// DOM with both Pareto tables and every chart, and draws it. Required when CULLIDE_REQUIRE_CHROMIUM
+// is set (tools/test.sh, where tools/setup.sh installs it); skipped otherwise without chromium.
+// Trap: a page a parser accepts that a browser does not render (a broken data: URI, bad markup).
+TEST(Cli, ReportRendersInChromium) {
+    if (std::system("command -v chromium >/dev/null 2>&1") != 0) {
+        if (std::getenv("CULLIDE_REQUIRE_CHROMIUM")) FAIL() << "no chromium (tools/setup.sh installs it)";
+        GTEST_SKIP() << "no chromium on PATH (Debian: apt-get install chromium)";
+    }
+    if (!haveMatplotlib()) GTEST_SKIP() << "no matplotlib for /usr/bin/python3";
+    const ReportRun& run = smallReport();
+    ASSERT_EQ(run.report.status, 0) << run.study.output << run.report.output;
+    const fs::path page = run.dir / "page" / "report.html", shot = run.dir / "shot.png";
+    // A profile of its own: none written to $HOME, no lock shared with another Chromium.
+    const std::string browser =
+        "timeout 300 chromium --headless --no-sandbox --disable-gpu --hide-scrollbars "
+        "--window-size=1200,2400 --user-data-dir=" +
+        quote((run.dir / "chromium-profile").string()) + " ";
+    const std::string url = quote("file://" + page.string());
+    const CliRun dom = cullide::test::runCommand("( " + browser + "--dump-dom " + url + " 2>/dev/null )");
+    ASSERT_EQ(dom.status, 0) << dom.output;
+    EXPECT_EQ(countOf(dom.output, "<table class=\"pareto\""), 2u) << dom.output.substr(0, 2000);
+    EXPECT_EQ(countOf(dom.output, "<img src=\"data:image/png;base64,"), attributeValues(readAll(page), "src").size());
+    const CliRun draw = cullide::test::runCommand(browser + "--screenshot=" + quote(shot.string()) + " " + url);
+    ASSERT_EQ(draw.status, 0) << draw.output;
+    // A PNG of the window's size (its IHDR: width and height, big-endian, at bytes 16 and 20), and
+    // more than a blank page's few kilobytes.
+    const std::string png = readAll(shot);
+    ASSERT_GT(png.size(), 24u) << draw.output;
+    EXPECT_EQ(png.substr(1, 3), "PNG");
+    auto be32 = [&](size_t at) {
+        return (uint32_t(uint8_t(png[at])) << 24) | (uint32_t(uint8_t(png[at + 1])) << 16) |
+            (uint32_t(uint8_t(png[at + 2])) << 8) | uint32_t(uint8_t(png[at + 3]));
+    };
+    EXPECT_EQ(be32(16), 1200u);
+    EXPECT_EQ(be32(20), 2400u);
+    EXPECT_GT(png.size(), 50000u) << "a blank page";
+}

@@ -1,0 +1,22 @@
+"""Charts for cullide: `cullide plot INPUT... -o DIR` (PNG and SVG of each chart), and
+`cullide report STUDY... -o DIR` (--report: DIR/report.html, one self-contained page).
+
+Inputs, recognised by content:
+  - study results (`cullide study`, .csv or .jsonl; the .jsonl beside a .csv is read for the
+    per-call statistics): speed vs accuracy with the Pareto front (one panel per scene), time vs
+    triangle count of generated scenes swept at several sizes (the paper's Figure 8), per-call
+    time and triangles rendered (Figures 9-10) and accumulated % pruned vs accumulated % time
+    (Figure 11) from the runs of one method (--method, default modified) with several calls,
+    false prunes by cause;
+  - stability sweeps (`cullide study --stability`, .csv with a `sweep` column);
+  - `cullide prune --json` output: Figures 9-11 per frame;
+  - Google Benchmark JSON (`cullide_bench --benchmark_format=json`): time per benchmark, and time
+    vs `tris` where the names carry it.
+Study charts: one colour per method, one marker per combination of the other axes that vary,
+scenes by name ("bunny 5k", a file's name), a legend instead of per-point labels, log axes where
+values span a decade or more.
+Needs matplotlib and numpy (Debian: /usr/bin/python3 with python3-matplotlib).
+"""
+# The modules: load (reading the inputs), output (saving a chart), encodings (the study charts'
+# colours, markers, scene names and per-scene summaries), study_charts, paper_figures (Figures 8-11),
+# stability_charts, bench_charts, report (`cullide report`'s page) and cli (the command line).
