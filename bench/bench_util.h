@@ -6,12 +6,29 @@
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
 
+#include <nlohmann/json.hpp>
+
+#include <fstream>
 #include <map>
 #include <string>
 
 #include <algorithm>
 #include <utility>
 #include <vector>
+
+// The 0.1.0 reference build's recorded figure for `benchmark` (bench/baseline.json, the one place
+// that holds them), or 0 when it has none: the x_v010 counters divide by it where that build cannot
+// run in the same process.
+inline double baselineFigure(const std::string& benchmark) {
+    static const nlohmann::json baseline = [] {
+        std::ifstream f(CULLIDE_BASELINE_JSON);
+        return f ? nlohmann::json::parse(f, nullptr, false) : nlohmann::json();
+    }();
+    if (!baseline.is_object() || !baseline.contains("figures")) return 0;
+    for (const nlohmann::json& figure : baseline["figures"])
+        if (figure.value("benchmark", "") == benchmark) return figure.value("value", 0.0);
+    return 0;
+}
 
 // The self variant's reducePCS (the seed paper's Figure 3, docs/paper.md#figure-3), both passes, one direction, as one
 // command list, over consecutive objects of `perObject` triangles (0: the whole mesh).

@@ -5,11 +5,11 @@
 //   BM_PeakMemory/<command>: peak resident memory of `cullide prune` (0) or `cullide oracle` (1)
 //     on the generated bunny of 1M triangles (`make-scene bunny --triangles 1000000`,
 //     999,424 triangles after simplification), default options. Counters: peak_MB (10^6 bytes),
-//     B_per_tri, x_90b80f8 (commit 90b80f8's peak over this run's, from kPeakKiB90b80f8) and
-//     goal_B_per_tri (issue 16: 150).
+//     B_per_tri, x_v010 (the 0.1.0 reference build's recorded peak over this run's,
+//     bench/baseline.json) and goal_B_per_tri (150).
 //   BM_StudyPaper: `cullide study --preset paper -q` (the paper's experiments: 28 runs of the
 //     deformed bunny and the two cows, median of 3 each, oracle and causes included), wall time;
-//     x_90b80f8 is kStudyPaperSeconds90b80f8 over this run's time.
+//     x_v010 is the 0.1.0 reference build's recorded time (bench/baseline.json) over this run's.
 //
 // Each runs once per invocation (Iterations(1)): a 1M-triangle prune or the preset take seconds,
 // and a second run would measure the same thing. Filter them out (--benchmark_filter=-BM_Peak...)
@@ -95,10 +95,6 @@ const fs::path& bunny1M() {
     return scene;
 }
 
-// Commit 90b80f8's peak resident memory on the same scene, KiB, measured with its own build of
-// the tool (`/usr/bin/time -f %M`), one run each, on the project's 2-core build machine
-// (2026-11-22; the issue's table says 370 MB and 269 MB).
-constexpr long kPeakKiB90b80f8[] = {370'700, 268'852};  // prune, oracle
 constexpr double kGoalBytesPerTriangle = 150;
 constexpr size_t kBunny1MTriangles = 999'424;
 
@@ -122,7 +118,9 @@ void BM_PeakMemory(benchmark::State& state) {
     state.counters["peak_MB"] = bytes / 1e6;
     state.counters["B_per_tri"] = bytes / double(kBunny1MTriangles);
     state.counters["goal_B_per_tri"] = kGoalBytesPerTriangle;
-    state.counters["x_90b80f8"] = double(kPeakKiB90b80f8[state.range(0)]) / double(r.maxRssKiB);
+    // The 0.1.0 reference build's recorded peak (bench/baseline.json) over this run's.
+    const double oldKiB = baselineFigure("BM_PeakMemory/command:" + std::to_string(state.range(0)));
+    if (oldKiB > 0) state.counters["x_v010"] = oldKiB / double(r.maxRssKiB);
 }
 BENCHMARK(BM_PeakMemory)
     ->ArgName("command")
@@ -130,11 +128,6 @@ BENCHMARK(BM_PeakMemory)
     ->Iterations(1)
     ->UseManualTime()
     ->Unit(benchmark::kSecond);
-
-// Commit 90b80f8's `cullide study --preset paper -q`, wall seconds, measured with its own build
-// in the same A/B session as kPeakKiB90b80f8, back to back with this commit's (the issue's 36 s
-// came from a busier machine).
-constexpr double kStudyPaperSeconds90b80f8 = 27.1;
 
 void BM_StudyPaper(benchmark::State& state) {
     const fs::path out = scratchDir() / "paper.csv";
@@ -149,7 +142,9 @@ void BM_StudyPaper(benchmark::State& state) {
         state.SkipWithError("cullide study --preset paper failed");
         return;
     }
-    state.counters["x_90b80f8"] = kStudyPaperSeconds90b80f8 / r.seconds;
+    // The 0.1.0 reference build's recorded time (bench/baseline.json) over this run's.
+    const double oldSeconds = baselineFigure("BM_StudyPaper");
+    if (oldSeconds > 0) state.counters["x_v010"] = oldSeconds / r.seconds;
     state.counters["peak_MB"] = double(r.maxRssKiB) * 1024.0 / 1e6;
 }
 BENCHMARK(BM_StudyPaper)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);

@@ -8,8 +8,8 @@
 //     (make-scene cows); method 0 = original, 1 = modified, 2 = modified with adaptive
 //     resolution (`--resolution auto`, docs/cullide.md#adaptive-resolution). Counters: PCS
 //     triangles, reducePCS calls, triangles rendered, queries, levels 0-2's time and triangle
-//     rate (the whole mesh drawn), and on the 270k modified runs on one thread x_90b80f8 (commit
-//     90b80f8's CPU time over this run's).
+//     rate (the whole mesh drawn), and on the 270k modified runs on one thread x_v010 (the 0.1.0
+//     reference build's recorded CPU time, bench/baseline.json, over this run's).
 //   BM_Views/<scene>/<res>/<views>: one prune (modified) with one fitted view per call (views 0,
 //     fit) or one per group of overlapping nodes (views 1, clustered;
 //     docs/cullide.md#views-per-cluster); scene 0 = data/scenes/two_cows_and_bunny.json, 1 = 64
@@ -28,9 +28,9 @@
 //   BM_Hierarchy/<kind>/<triangles>: building one object's hierarchy (the per-frame cost the
 //     paper's method pays instead of preprocessing); kind 0 = connectivity, 1 = random. Wall
 //     time: nodes of 2^16 triangles and more build their subtrees in parallel. Counters:
-//     cpu_ms, the CPU time of all threads per build; for connectivity, x_90b80f8: commit
-//     90b80f8's build (tests/hierarchy_90b80f8.h, one thread, run in this process right after
-//     the timed loop, best of its runs) over this run's wall time, and same_90b80f8: 1 when its
+//     cpu_ms, the CPU time of all threads per build; for connectivity, x_v010: the 0.1.0
+//     reference build's (tests/hierarchy_v010.h, one thread, run in this process right after
+//     the timed loop, best of its runs) over this run's wall time, and same_v010: 1 when its
 //     hierarchy equals today's (nodes and order).
 //   BM_ChosenDirections/<case>: chosen directions against the axes (docs/cullide.md#chosen-directions),
 //     both timed in every iteration (thread CPU time), the ratio printed as x_axes (the axes' time
@@ -49,7 +49,7 @@
 #include "cullide/scene_io.h"
 
 #include "bench_util.h"
-#include "hierarchy_90b80f8.h"  // tests/
+#include "hierarchy_v010.h"  // tests/
 
 #include <benchmark/benchmark.h>
 
@@ -83,15 +83,6 @@ double threadCpuMs() {
     return 1e3 * double(t.tv_sec) + 1e-6 * double(t.tv_nsec);
 }
 
-// Commit 90b80f8's BM_Prune CPU time per run (ms, one thread) on the 270k scenes, modified
-// method, by (scene, tris, method): that commit's own cullide_bench with
-// --benchmark_repetitions=5, the least CPU column, in the same A/B run as this one's figure (the
-// closing note of issue 16); x_90b80f8 = that over this run's CPU time per run.
-constexpr std::pair<std::array<int64_t, 3>, double> kPruneCpuMs90b80f8[] = {
-    {{0, 270000, 1}, 1011},
-    {{1, 270000, 1}, 1294},
-};
-
 void BM_Prune(benchmark::State& state) {
     const Scene& scene = paperScene(int(state.range(0)), size_t(state.range(1)));
     raster::CpuBackendOptions bo;
@@ -118,12 +109,15 @@ void BM_Prune(benchmark::State& state) {
     state.counters["queries"] = double(queries);
     state.counters["hier_ms"] = 1e3 * r.hierarchySeconds;
     // Levels 0-2 draw (nearly) the whole mesh and prune almost nothing: the setup-bound part
-    // (the last iteration's calls; issue 16's row "levels 0-2").
+    // (the last iteration's calls).
     state.counters["lv012_ms"] = 1e3 * seconds012;
     state.counters["lv012_Mtri/s"] = seconds012 > 0 ? 1e-6 * double(rendered012) / seconds012 : 0;
-    for (const auto& [args, oldMs] : kPruneCpuMs90b80f8)
-        if (args == std::array<int64_t, 3>{state.range(0), state.range(1), state.range(2)} && bo.threads == 1)
-            state.counters["x_90b80f8"] = oldMs / cpuMs;
+    // The 0.1.0 reference build's recorded CPU time per run of the same row (bench/baseline.json:
+    // the 270k modified rows on one thread) over this run's.
+    const double oldMs = baselineFigure("BM_Prune/scene:" + std::to_string(state.range(0)) +
+                                        "/tris:" + std::to_string(state.range(1)) + "/method:" +
+                                        std::to_string(state.range(2)) + "/threads:" + std::to_string(bo.threads));
+    if (oldMs > 0) state.counters["x_v010"] = oldMs / cpuMs;
 }
 BENCHMARK(BM_Prune)
     ->ArgNames({"scene", "tris", "method", "threads"})
@@ -251,18 +245,18 @@ void BM_Hierarchy(benchmark::State& state) {
     state.counters["Mtri/s"] =
         benchmark::Counter(double(mesh.triangleCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
     if (o.kind != HierarchyKind::Connectivity) return;
-    // Issue 16's row: 90b80f8's build on the same mesh, the best of as many runs as fit in about
+    // The 0.1.0 reference build's hierarchy build on the same mesh, the best of as many runs as fit in about
     // a second (one at 1M triangles), and whether it builds the same hierarchy.
     double peerMs = std::numeric_limits<double>::infinity(), spentMs = 0;
     Hierarchy peer;
     while (spentMs < 1000) {
         const auto t = std::chrono::steady_clock::now();
-        peer = peer90b80f8::buildConnectivityHierarchy(mesh, o);
+        peer = v010::buildConnectivityHierarchy(mesh, o);
         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
         peerMs = std::min(peerMs, ms), spentMs += ms;
     }
-    state.counters["x_90b80f8"] = peerMs / wallMs;
-    state.counters["same_90b80f8"] = peer90b80f8::sameHierarchy(buildHierarchy(mesh, o), peer) ? 1 : 0;
+    state.counters["x_v010"] = peerMs / wallMs;
+    state.counters["same_v010"] = v010::sameHierarchy(buildHierarchy(mesh, o), peer) ? 1 : 0;
 }
 BENCHMARK(BM_Hierarchy)
     ->ArgNames({"kind", "tris"})

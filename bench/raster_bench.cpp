@@ -5,8 +5,8 @@
 //     one command list: clear, LESS, draw all. One thread takes the direct path (direct:1,
 //     CpuBackendOptions::direct) unless told not to (direct:0, the tiles); two threads take it
 //     for the small triangles of leg 1 (blocks set up in parallel), the tiles otherwise.
-//     Counters: Mtri/s and Mfrag/s (covered centres); on leg 1, 500 px, 1 thread (issue 16's
-//     row) x_90b80f8 (rate over commit 90b80f8's), x_tiles (rate over the tiles on one thread,
+//     Counters: Mtri/s and Mfrag/s (covered centres); on leg 1, 500 px, 1 thread, x_v010 (rate
+//     over the 0.1.0 reference build's recorded one, bench/baseline.json), x_tiles (rate over the tiles on one thread,
 //     timed in this run just before) and the goal of 30 M triangles/s.
 //   BM_ReducePcs/<mesh>/<triangles per object>/<threads>: one self-variant reducePCS (the seed
 //     paper's Figure 3) in one view direction (+z), as ONE command list: forward pass
@@ -65,12 +65,6 @@ OrthoView windowView(int W) {
     return v;
 }
 
-// Commit 90b80f8's BM_Triangles/leg:1/W:500/threads:1 rate (M triangles/s): its own
-// cullide_bench in the same A/B run as kPruneCpuMs90b80f8 (cullide_bench.cpp), the best of 10
-// repetitions (1.5-2.3; this commit gave 5.5-6.8 in the same run). Issue 16's table says 7.3 for
-// that commit, measured another way; the figure here is the one this benchmark gave.
-constexpr double kSmallTrianglesMtris90b80f8 = 2.3;
-
 // The last rate of BM_Triangles/leg:1/W:500/threads:1/direct:0 in this run (M triangles/s).
 double smallTrianglesTilesMtris = 0;
 
@@ -102,13 +96,15 @@ void BM_Triangles(benchmark::State& state) {
     state.counters["Mtri/s"] = benchmark::Counter(double(count) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
     state.counters["Mfrag/s"] =
         benchmark::Counter(double(backend->lastStats().fragments) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
-    // Issue 16's row "~1 px triangles": commit 90b80f8's rate on leg 1, W 500, 1 thread, and the
+    // The "~1 px triangles" row: the 0.1.0 reference build's recorded rate on leg 1, W 500, 1 thread
+    // (bench/baseline.json), and the
     // goal (Masked Occlusion Culling does 20 M tris/s per thread at 10x10 px; ours is depth-exact).
     if (state.range(0) == 1 && W == 500 && o.threads == 1) {
         const double rate = double(count) / 1e6 / seconds;
         if (!o.direct) smallTrianglesTilesMtris = rate;
         else if (smallTrianglesTilesMtris > 0) state.counters["x_tiles"] = rate / smallTrianglesTilesMtris;
-        state.counters["x_90b80f8"] = rate / kSmallTrianglesMtris90b80f8;
+        const double oldRate = baselineFigure("BM_Triangles/leg:1/W:500/threads:1/direct:1");
+        if (oldRate > 0) state.counters["x_v010"] = rate / oldRate;
         state.counters["goal_Mtri/s"] = 30;
     }
 }

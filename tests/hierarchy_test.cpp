@@ -1,10 +1,10 @@
 // Hierarchies: structure invariants, connectivity, determinism, soups; the connectivity build
-// against commit 90b80f8's build of the same algorithm (hierarchy_90b80f8.h).
+// against the 0.1.0 reference build of the same algorithm (hierarchy_v010.h).
 #include "cullide/hierarchy.h"
 
 #include "cullide/error.h"
 #include "cullide/mesh_io.h"
-#include "hierarchy_90b80f8.h"
+#include "hierarchy_v010.h"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -105,13 +105,13 @@ void expectSameWithOneThread(const Mesh& m) {
 }
 
 // Expects buildHierarchy's connectivity hierarchy to equal the reference's (the build as first
-// written, up to commit 90b80f8: hierarchy_90b80f8.h) for every leaf size and branching given.
+// written, as of the 0.1.0 reference build: hierarchy_v010.h) for every leaf size and branching given.
 void expectSameAsReference(const Mesh& m, std::initializer_list<uint32_t> leafSizes,
                            std::initializer_list<uint32_t> branchings, const std::string& what) {
     for (uint32_t leaf : leafSizes)
         for (uint32_t branching : branchings) {
             const HierarchyOptions o{HierarchyKind::Connectivity, leaf, branching, 1};
-            const Hierarchy want = peer90b80f8::buildConnectivityHierarchy(m, o);
+            const Hierarchy want = v010::buildConnectivityHierarchy(m, o);
             const Hierarchy got = buildHierarchy(m, o);
             SCOPED_TRACE(what + " leaf " + std::to_string(leaf) + " branching " + std::to_string(branching));
             ASSERT_EQ(got.order, want.order);

@@ -149,7 +149,7 @@ TEST(Options, AdaptiveResolution) {
     EXPECT_NE(m.find("auto:0"), std::string::npos) << m;
 }
 
-// The trap of issue 12: `prune --depth 7` named the option, `study --depths 7` did not. The same
+// Trap: `prune --depth 7` named the option while `study --depths 7` did not. The same
 // bad value gives the same cause under any name; the default names are prune's options.
 TEST(Options, SameBadValueSameCause) {
     OptionText t;

@@ -27,8 +27,8 @@ std::string readFile(const fs::path& path) {
     if (!f) throw InputError(src, std::string("cannot open: ") + std::strerror(errno));
     // A regular file's size is known: one buffer of that size, read into in place. Appending
     // 64 KiB at a time grew the string by doubling, copying it at each step: a 10 MB mesh touched
-    // about twice its size in fresh pages, whose faults cost more than the parse (the shared build
-    // machine's VM pays ~10 us per 4 KiB fault). The loop after it reads what a file that grew, a
+    // about twice its size in fresh pages, whose faults cost more than the parse (a virtual
+    // machine may pay ~10 us per 4 KiB fault). The loop after it reads what a file that grew, a
     // pipe or a special file still holds.
     std::string data;
     struct stat info;

@@ -7,6 +7,7 @@
 #include <cullide/error.h>
 #include <cullide/mesh_io.h>
 #include <cullide/oracle/oracle.h>
+#include <cullide/pipeline/pruner.h>
 #include <cullide/provenance.h>
 #include <cullide/raster/cpu_backend.h>
 
@@ -28,12 +29,14 @@ int main(int argc, char** argv) {
         cullide::Scene scene;
         scene.objects.push_back({"mesh", cullide::loadMesh(argv[1]), cullide::Transform::Identity()});
         auto backend = cullide::raster::makeCpuBackend();
-        const cullide::CullideResult modified = cullide::runCullide(scene, *backend, cullide::CullideOptions{});
-        cullide::CullideOptions reliableOptions;
-        reliableOptions.method = cullide::CullMethod::Reliable;
-        const cullide::CullideResult reliable = cullide::runCullide(scene, *backend, reliableOptions);
+        cullide::Pruner pruner(cullide::PruneSettings{}, *backend);  // modified: 500x500, D24, six axes
+        const cullide::CullideResult modified = pruner.prune(scene).cull;
+        cullide::PruneSettings reliableSettings;
+        reliableSettings.cullide.method = cullide::CullMethod::Reliable;
+        reliableSettings.exactStage = true;  // the exact pairs among the PCS, too
+        const cullide::FramePrune reliable = cullide::Pruner(reliableSettings, *backend).prune(scene);
         const cullide::oracle::Truth truth = cullide::oracle::findIntersections(scene);
-        const auto& pcs = reliable.pcs;
+        const auto& pcs = reliable.cull.pcs;
         size_t kept = 0;
         for (const auto& p : truth.pairs)
             kept +=
@@ -44,7 +47,11 @@ int main(int argc, char** argv) {
         const bool inRange = std::all_of(modified.pcs.begin(), modified.pcs.end(), [&](const cullide::PcsTriangle& t) {
             return t.object == 0 && t.triangle < scene.triangleCount();
         });
-        return !modified.pcs.empty() && inRange && !truth.pairs.empty() && kept == truth.pairs.size() ? 0 : 1;
+        // The reliable PCS holds both triangles of every pair: the exact stage on it finds them all.
+        const bool exactAgrees = reliable.exact && reliable.exact->pairs == truth.pairs;
+        return !modified.pcs.empty() && inRange && !truth.pairs.empty() && kept == truth.pairs.size() && exactAgrees
+            ? 0
+            : 1;
     } catch (const cullide::InputError& e) {
         std::fprintf(stderr, "consumer: %s\n", e.what());
         return 2;

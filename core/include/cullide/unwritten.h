@@ -129,10 +129,10 @@ using UnwrittenVector = std::vector<T, UnwrittenAllocator<T, kOwnPages>>;
 //
 // Why: such a call's arrays of 64 KiB to 2 MiB come from malloc, whose memory is warm only if
 // the previous call left it there. Between calls of another library (CGAL's, in BM_OracleInterleaved)
-// glibc had given it back, and every 4 KiB page was a fault again when first written (13 us
-// each on the development VM: a 23k-triangle oracle call took 16.6 ms instead of 8). A 2 MiB
-// huge page costs one fault and 2 MiB of zeroing (8 MiB in 0.27-0.32 ms here against 24-26 ms
-// in 4 KiB pages), whether the memory is warm or not.
+// glibc had given it back, and every 4 KiB page was a fault again when first written (on a
+// virtual machine, where a fault costs about 13 us, a 23k-triangle oracle call took twice its
+// time). A 2 MiB huge page costs one fault and 2 MiB of zeroing, whether the memory is warm or
+// not: far less than 512 faults of 4 KiB.
 //
 // How: by size, so that deallocate() knows without a lookup where an array came from.
 //   - below 64 KiB: malloc (its small chunks are warm);

@@ -97,7 +97,7 @@ struct Truth {
 // Memory that calls of the oracle share: given the same workspace, findIntersections and
 // exactStage reuse the previous call's arrays (primitive records, boxes, planes, world
 // positions, the grid's entries) instead of allocating them again. Fresh memory is paid for in
-// page faults when first written (about 13 us per 4 KiB page on the development VM): between two
+// page faults when first written (about 13 us per 4 KiB page on a virtual machine): between two
 // calls whose memory went back to the system, a third of a call on 23k triangles. A call without
 // one takes its arrays from transparent huge pages where the system offers them (a PageArena,
 // cullide/unwritten.h: one fault per 2 MiB, and a few chunks pooled for the next call), which

@@ -1,6 +1,6 @@
-// Commit 90b80f8's connectivity hierarchy build (hierarchy_90b80f8.h): its code as it was, less
+// The 0.1.0 reference build's connectivity hierarchy build (hierarchy_v010.h): its code as it was, less
 // the random kind, the option parsing and Hierarchy::depth (today's types are the same).
-#include "hierarchy_90b80f8.h"
+#include "hierarchy_v010.h"
 
 #include "cullide/error.h"
 
@@ -9,7 +9,7 @@
 #include <span>
 #include <vector>
 
-namespace cullide::peer90b80f8 {
+namespace cullide::v010 {
 
 namespace {
 
@@ -205,4 +205,4 @@ bool sameHierarchy(const Hierarchy& a, const Hierarchy& b) {
                    });
 }
 
-}  // namespace cullide::peer90b80f8
+}  // namespace cullide::v010
