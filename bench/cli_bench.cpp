@@ -14,6 +14,8 @@
 // Each runs once per invocation (Iterations(1)): a 1M-triangle prune or the preset take seconds,
 // and a second run would measure the same thing. Filter them out (--benchmark_filter=-BM_Peak...)
 // for a quick run of the kernels.
+#include "bench_util.h"
+
 #include <benchmark/benchmark.h>
 
 #include <fcntl.h>
