@@ -9,6 +9,8 @@
 
 #include "egl_context.h"
 
+#include "../gpu/gpu_common.h"
+
 #include <epoxy/gl.h>
 
 #include <algorithm>
@@ -214,12 +216,7 @@ public:
         view.validate();
         context_.makeCurrent();
         const DepthFormat format = effectiveFormat(view.depth);
-        if (!(format == view.depth) && warned_.insert(view.depth.name()).second) {
-            const std::string msg = "gl backend: depth " + view.depth.name() + " is not available; using " +
-                format.name() + " (the nearest GL depth format)";
-            if (options_.warn) options_.warn(msg);
-            else std::fprintf(stderr, "cullide: warning: %s\n", msg.c_str());
-        }
+        gpu::warnFormatOnce(warned_, view.depth, format, "gl backend", "GL", options_.warn);
         if (!fbo_ || view.width != width_ || view.height != height_ || !(format == format_)) {
             if (fbo_) glDeleteFramebuffers(1, &fbo_);
             if (rbo_) glDeleteRenderbuffers(1, &rbo_);
@@ -242,18 +239,11 @@ public:
             glClear(GL_DEPTH_BUFFER_BIT);
             glDepthMask(mask_ ? GL_TRUE : GL_FALSE);
         }
-        // The exact viewport: (-P, -P, 2P, 2P) maps clip x in [-1, 1] to window [-P, P] with
-        // scale P and offset 0, so x_window = (xw / P) * P = xw exactly.
-        // P >= twice the larger side where the GL allows it, so that GL's clipping against the
-        // viewport (at window -P and P) stays at least one viewport away from the framebuffer.
-        auto fits = [&](int q) { return 2 * q <= info_.maxViewport && -q >= viewportBoundsMin_; };
-        // For a tile (OrthoView::tile) the geometry spans its whole grid, up to a grid's side away
-        // from the framebuffer: P grows towards twice the grid's side, so that GL clips none of it.
-        int P = 1;
-        while (P < std::max(width_, height_)) P *= 2;
-        const int64_t reach = 2 * int64_t(std::max(view.fullWidth(), view.fullHeight()));
-        while (P < reach && fits(2 * P)) P *= 2;
-        const bool exact = fits(P);
+        // The exact viewport (gpu_common.h).
+        const gpu::ViewportSize viewport =
+            gpu::exactViewport(width_, height_, view, info_.maxViewport, viewportBoundsMin_);
+        const int P = viewport.P;
+        const bool exact = viewport.exact;
         if (exact) {
             glViewport(-P, -P, 2 * P, 2 * P);
             glProgramUniform2f(program_, uniforms_[6], 1.0f / float(P), 1.0f / float(P));
@@ -277,18 +267,7 @@ public:
     }
 
     std::vector<uint64_t> execute(const CommandList& list) override {
-        if (!haveView_) throw InputError("command list", "execute() before setView()");
-        if (list.queryOpen()) throw InputError("command list", "a query is still open at the end of the list");
-        if (list.conservativeCount() > 0)
-            throw InputError("command list",
-                             "conservative commands need conservative rasterization, which this GL "
-                             "backend does not provide (the reliable method is CPU-only)");
-        for (const Command& c : list.commands())
-            if (c.op == Command::Op::Draw && uint64_t(c.first) + c.count > triangleCount_)
-                throw InputError("command list",
-                                 "draw of triangles [" + std::to_string(c.first) + ", " +
-                                     std::to_string(uint64_t(c.first) + c.count) + ") but the geometry has " +
-                                     std::to_string(triangleCount_) + " triangles");
+        gpu::checkCommandList(list, haveView_, triangleCount_, "GL");
         context_.makeCurrent();
         glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
         glUseProgram(program_);
@@ -328,7 +307,7 @@ public:
                 }
                 case Command::Op::EndQuery: glEndQuery(activeTarget); break;
                 case Command::Op::ClearIntervals:
-                case Command::Op::DrawConservative: break;  // refused above
+                case Command::Op::DrawConservative: break;  // refused by checkCommandList
                 case Command::Op::Draw:
                     if (c.count > 0)
                         glDrawElements(GL_TRIANGLES, GLsizei(uint64_t(c.count) * 3), GL_UNSIGNED_INT,
