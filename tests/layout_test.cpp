@@ -76,8 +76,10 @@ TEST(Layout, IncludesPointOneWay) {
 // Trap: a private header of the CPU rasterizer that needs the public backend header (for its
 // options or statistics) and so runs an arrow back up; cpu_options.h is what they include.
 TEST(Layout, PrivateRasterHeadersDoNotIncludeTheBackend) {
-    for (const fs::path& p : sources({"raster/src"}))
-        if (p.extension() == ".h") EXPECT_TRUE(includesOf(p, {"cullide/raster/cpu_backend.h"}).empty()) << shortName(p);
+    for (const fs::path& p : sources({"raster/src"})) {
+        if (p.extension() != ".h") continue;
+        EXPECT_TRUE(includesOf(p, {"cullide/raster/cpu_backend.h"}).empty()) << shortName(p);
+    }
 }
 
 }  // namespace
