@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The whole test suite, from a fresh Debian 12 machine: installs the Debian packages the project
-# needs (tools/setup.sh), builds in Release, runs every test with CTest and the README's Slurm recipe
+# needs (tools/setup.sh), builds in Release, runs every test with CTest and the Slurm recipe of docs/studies.md
 # on a private single-node cluster (tools/cluster/slurm-smoke.sh, as root), then builds and runs the
 # test suite under AddressSanitizer+UndefinedBehaviorSanitizer and under ThreadSanitizer.
 # The ThreadSanitizer build links a oneTBB built with -fsanitize=thread from Debian's source package
@@ -28,7 +28,7 @@ run_suite() {  # preset name, build dir, extra configure arguments
 }
 
 run_suite release build
-echo "== test.sh: the README's Slurm recipe (tools/cluster/slurm-smoke.sh)"
+echo "== test.sh: the Slurm recipe of docs/studies.md (tools/cluster/slurm-smoke.sh)"
 sudo=""
 [ "$(id -u)" -eq 0 ] || sudo="sudo" # munged's key must belong to the munge user
 $sudo bash tools/cluster/slurm-smoke.sh build/tools/cullide

@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
-# The README's Slurm recipe, run for real on this machine, so that it keeps working:
+# The Slurm recipe of docs/studies.md ("Shards"), run for real on this machine, so that it keeps
+# working:
 #
 #   bash tools/cluster/slurm-smoke.sh build/tools/cullide
 #
 # Starts a private single-node Slurm (Debian's slurm-wlm, 22.05 on Debian 12) with a generated
 # configuration and its own munged (own key and socket), all in a scratch folder; submits
-# tools/cluster/study-array.sbatch (the job script README.md shows, checked here to be the same
-# text) as a 4-task array on a small sweep of the bundled scenes; waits; merges the shards with the
-# README's `cullide study merge`; and checks that the merge equals the unsharded run but for the
+# tools/cluster/study-array.sbatch (the job script docs/studies.md shows, checked here to be the
+# same text) as a 4-task array on a small sweep of the bundled scenes; waits; merges the shards
+# with the recipe's `cullide study merge`; and checks that the merge equals the unsharded run but for the
 # timing columns (`*_ms`; in the JSON lines also the per-call seconds, the provenance and the
 # command line that ran the shard).
 # It stops only the daemons it started (by their pid files) and removes the scratch folder, on
@@ -36,9 +37,9 @@ for c in slurmctld slurmd sbatch squeue sinfo scontrol scancel munged munge unmu
 done
 id munge >/dev/null 2>&1 || fail "no 'munge' user (Debian's munge package creates it)"
 
-# The README shows the job script that is submitted below, verbatim: the recipe a reader copies is
-# the one tested here.
-python3 - "$repo/README.md" "$job_script" <<'EOF' || fail "README.md does not show tools/cluster/study-array.sbatch verbatim (a \`\`\`bash block holding the file); update the README"
+# docs/studies.md shows the job script that is submitted below, verbatim: the recipe a reader
+# copies is the one tested here.
+python3 - "$repo/docs/studies.md" "$job_script" <<'EOF' || fail "docs/studies.md does not show tools/cluster/study-array.sbatch verbatim (a \`\`\`bash block holding the file); update docs/studies.md"
 import sys
 readme, script = open(sys.argv[1]).read(), open(sys.argv[2]).read()
 blocks = [b.split("```", 1)[0] for b in readme.split("```bash\n")[1:]]
@@ -199,7 +200,7 @@ cat >"$scratch/sweep.json" <<EOF
 EOF
 cd "$work"
 t0=$(date +%s)
-# The job script as README.md shows it; the command line overrides its #SBATCH sizes for this node.
+# The job script as docs/studies.md shows it; the command line overrides its #SBATCH sizes for this node.
 jobid=$(CULLIDE=$cullide sbatch --parsable --array=0-3 --cpus-per-task=1 --time=00:10:00 \
   "$job_script" "$scratch/sweep.json" results) || fail "sbatch refused the job"
 jobid=${jobid%%;*}
@@ -223,7 +224,7 @@ if squeue -h -r -j "$jobid" --states=all -o %T | grep -qv '^COMPLETED$'; then
   fail "not every task of job $jobid COMPLETED"
 fi
 
-# The README's merge, then: the merge equals the unsharded run but for the timings.
+# The recipe's merge, then: the merge equals the unsharded run but for the timings.
 for i in 0 1 2 3; do
   [ "$(wc -l <"results/shard$i.csv")" -ge 2 ] || fail "results/shard$i.csv holds no run"
 done
