@@ -29,7 +29,7 @@ packages=(
   chromium
   # the Python module (python/) and its tests
   pybind11-dev python3-dev python3-pytest
-  # the README's Slurm recipe, run by tools/cluster/slurm-smoke.sh on a private single-node cluster
+  # the Slurm recipe of docs/studies.md, run by tools/cluster/slurm-smoke.sh on a private single-node cluster
   # (Slurm 22.05 and MUNGE; the script starts and stops its own daemons, nothing else runs them)
   slurm-wlm munge
 )
