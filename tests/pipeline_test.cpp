@@ -59,7 +59,7 @@ TEST(Pipeline, SequenceMatchesHandWiredLoop) {
             EXPECT_FALSE(ours.exact) << "no exact stage unless asked";
             calls += ours.cull.passes.size();
         }
-        if (mode == DirectionMode::Coherent) EXPECT_GT(calls, 0u);
+        EXPECT_GT(calls, 0u);
     }
 }
 
@@ -123,6 +123,19 @@ TEST(Pipeline, RefusesBadOptionsUpFront) {
     PruneSettings settings;
     settings.cullide.directions.clear();
     EXPECT_THROW((Pruner{settings, *backend}), InputError);
+}
+
+// Trap: a cost model the caller set replaced by the calibrated one. A model that prices the exact
+// stage at nothing makes auto stop before the second level, predicting 0 s for it.
+TEST(Pipeline, CallersCostModelIsKept) {
+    const Scene scene = cylinders().sceneAt(7);
+    auto backend = raster::makeCpuBackend();
+    PruneSettings settings;
+    settings.cullide.exactSwitch.kind = ExactSwitchKind::Auto;
+    settings.cullide.exactSwitch.exactCost = [](size_t) { return 0.0; };
+    const CullideResult r = Pruner(settings, *backend).prune(scene).cull;
+    EXPECT_EQ(r.switchedAtLevel, 1);
+    EXPECT_EQ(r.predictedExactSeconds, 0.0);
 }
 
 // Trap: the auto switch's cost model not linear in the PCS size, or calibrated on nothing: it

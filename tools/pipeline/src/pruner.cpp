@@ -23,8 +23,10 @@ CullideOptions Pruner::frameOptions(const Scene& scene, const FrameHooks& hooks)
     CullideOptions o = settings_.cullide;
     o.hierarchyCache = hierarchies_;
     o.directionHistory = directionHistory_;
-    // Auto's exact-stage cost, calibrated on this frame (timed inside the run when it predicts).
-    if (o.exactSwitch.kind == ExactSwitchKind::Auto) o.exactSwitch.exactCost = exactStageCostModel(scene);
+    // Auto's exact-stage cost, calibrated on this frame (timed inside the run when it predicts),
+    // unless the caller gave a model of its own.
+    if (o.exactSwitch.kind == ExactSwitchKind::Auto && !o.exactSwitch.exactCost)
+        o.exactSwitch.exactCost = exactStageCostModel(scene);
     if (hooks.onPass) o.onPass = hooks.onPass;
     if (hooks.onPassStats) o.onPassStats = hooks.onPassStats;
     return o;

@@ -9,7 +9,7 @@
 //     (DirectionHistory). One frame has nothing to carry over, so nothing is kept.
 //   - `--exact-switch auto` gets a cost model calibrated on each frame's own scene
 //     (exactStageCostModel), fresh per frame, so every run pays for its calibration inside its
-//     own time.
+//     own time; a model the caller set in ExactSwitch::exactCost is used instead.
 //   - With the exact stage, each frame's PCS goes to the oracle's exact stage (oracle::exactStage):
 //     the pipeline's final intersecting pairs, and the time to them (prune + exact stage).
 //   - Deterministic: the same scene, settings and backend results give the same PCS and pairs;
