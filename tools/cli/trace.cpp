@@ -76,7 +76,7 @@ Recording recordTrace(const Animation& animation, size_t first, size_t last, con
         frameName += std::to_string(f);
         if (shown) bar->update(f - first, frameName);
         // Within a frame, per reducePCS call (nothing else changes).
-        const FrameHooks hooks = shown ? passProgress(*bar, frameName, f - first, options.directions.size()) : FrameHooks{};
+        const FrameHooks hooks = bar ? passProgress(*bar, frameName, f - first, options.directions.size()) : FrameHooks{};
         recorder.setFrame(uint32_t(f));
         out.pcs.push_back(pruner.prune(animation.sceneAt(f), hooks).cull.pcs);
         if (shown) {

@@ -61,9 +61,6 @@ public:
     // them). Throws InputError on bad options (CullideOptions::validate).
     Pruner(PruneSettings settings, DepthBackend& backend, size_t frames = 1);
 
-    const PruneSettings& settings() const { return settings_; }
-    DepthBackend& backend() const { return backend_; }
-
     // Prunes the next frame. The scene stays the caller's.
     FramePrune prune(const Scene& scene, const FrameHooks& hooks = {});
     // The same for a scene the caller gives up: emptied as soon as its geometry is uploaded, so
