@@ -14,6 +14,7 @@ one line per case.
 import argparse
 import json
 import os
+import shutil
 import signal
 import struct
 import subprocess
@@ -370,6 +371,8 @@ def main():
         failed += p.returncode != 0
         print("%s  %s%s" % ("FAIL" if p.returncode else "ok  ", name, ": " + p.stdout.decode().strip() if p.returncode else ""))
     print("%d case(s) failed" % failed if failed else "every case holds")
+    if not args.keep:
+        shutil.rmtree(d, ignore_errors=True)
     return 1 if failed else 0
 
 
