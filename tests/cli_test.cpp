@@ -255,3 +255,15 @@ TEST(Cli, JsonOutputsCarryProvenance) {
     EXPECT_EQ(n, 2);
     EXPECT_EQ(readAll(d / "s.csv").find("provenance"), std::string::npos) << "the CSV keeps its columns";
 }
+
+// Trap: output lost on a full disk while the command says it succeeded (exit 0): a write error on
+// stdout, in cullide's own output (printf) or CLI11's (std::cout, --help), is exit status 2 naming
+// stdout and the cause.
+TEST(Cli, StdoutWriteErrorIsAnError) {
+    if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+    for (const std::string& args : {"info --json " + quote(kData + "/meshes/cow.off"), std::string("--help")}) {
+        const CliRun r = cullide::test::runCommand("( " + quote(CULLIDE_CLI_PATH) + " " + args + " > /dev/full )");
+        EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+        EXPECT_NE(r.output.find("cullide: error: stdout: No space left on device"), std::string::npos) << r.output;
+    }
+}

@@ -178,5 +178,19 @@ TEST(SceneIo, FailedWriteThrowsNamingTheFile) {
     EXPECT_FALSE(std::filesystem::exists(target));
 }
 
+// Trap: a scene file that cannot be written (here a folder is in its place) after its meshes were:
+// the meshes left behind without the scene that names them. A mesh that was there before stays.
+TEST(SceneIo, FailedSceneWriteRemovesTheMeshesItWrote) {
+    Animation a = loadScene(testData("good/polys.off"));
+    a.scene.objects.push_back(a.scene.objects[0]);
+    a.scene.objects[0].name = "first", a.scene.objects[1].name = "second";
+    TempDir d;
+    std::filesystem::create_directory(d / "s.json");
+    std::ofstream(d / "s_1_second.off") << "not ours to remove\n";
+    EXPECT_THROW(writeScene(a, d / "s.json"), InputError);
+    EXPECT_FALSE(std::filesystem::exists(d / "s_0_first.off"));
+    EXPECT_TRUE(std::filesystem::exists(d / "s_1_second.off"));
+}
+
 }  // namespace
 }  // namespace cullide

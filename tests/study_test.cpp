@@ -378,6 +378,24 @@ TEST(Study, ExactSwitchAxis) {
     }
 }
 
+// Trap: a study output of which one file could not be written leaving the other behind (a CSV
+// with its header only and no records): the CSV and its JSON lines appear together or not at all.
+TEST(Study, OutputsAreWrittenTogetherOrNotAtAll) {
+    for (const char* taken : {"m.jsonl", "m.csv"}) {
+        test::TempDir dir;
+        fs::create_directory(dir / taken);  // where the file would go
+        try {
+            (void)mergeOutputs({}, dir / "m.csv");
+            ADD_FAILURE() << taken << ": written";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(taken), std::string::npos) << e.what();
+        }
+        size_t files = 0;
+        for (const auto& e : fs::directory_iterator(dir.path())) files += e.is_regular_file();
+        EXPECT_EQ(files, 0u) << taken << ": a file was left";
+    }
+}
+
 size_t sumOf(const std::vector<nlohmann::ordered_json>& rows, const char* key) {
     size_t n = 0;
     for (const auto& r : rows) n += r[key].get<size_t>();

@@ -280,6 +280,32 @@ std::string safeName(const std::string& name) {
     return s.substr(0, 64);
 }
 
+// The meshes a writeScene call created, removed again unless the call completes: a scene file
+// that cannot be written leaves no meshes behind without it. (Meshes that were there before are
+// overwritten, not removed: the call does not know what else uses them.)
+class CreatedMeshes {
+public:
+    CreatedMeshes() = default;
+    CreatedMeshes(const CreatedMeshes&) = delete;
+    CreatedMeshes& operator=(const CreatedMeshes&) = delete;
+    ~CreatedMeshes() {
+        std::error_code ec;
+        if (!kept_)
+            for (const fs::path& p : created_) fs::remove(p, ec);
+    }
+    void write(const Mesh& mesh, const fs::path& path) {
+        std::error_code ec;
+        const bool existed = fs::exists(fs::symlink_status(path, ec));
+        writeOff(mesh, path);
+        if (!existed) created_.push_back(path);
+    }
+    void keep() { kept_ = true; }
+
+private:
+    std::vector<fs::path> created_;
+    bool kept_ = false;
+};
+
 }  // namespace
 
 Animation loadScene(const fs::path& path) {
@@ -311,11 +337,12 @@ void writeScene(const Animation& animation, const fs::path& path) {
     OrderedJson root;
     OrderedJson objects = OrderedJson::array();
     std::vector<std::string> bases;
+    CreatedMeshes meshes;
     for (size_t i = 0; i < animation.scene.objects.size(); ++i) {
         const Object& o = animation.scene.objects[i];
         const std::string base = stem + "_" + std::to_string(i) + "_" + safeName(o.name);
         bases.push_back(base);
-        writeOff(o.mesh, dir / (base + ".off"));
+        meshes.write(o.mesh, dir / (base + ".off"));
         OrderedJson jo;
         jo["name"] = o.name;
         jo["mesh"] = base + ".off";
@@ -340,7 +367,7 @@ void writeScene(const Animation& animation, const fs::path& path) {
                     Mesh m;
                     m.positions = p.positions ? *p.positions : animation.sceneAt(f).objects[i].mesh.positions;
                     m.triangles = animation.scene.objects[i].mesh.triangles;
-                    writeOff(m, dir / file);
+                    meshes.write(m, dir / file);
                     jp["positions"] = file;
                 }
                 poses[animation.scene.objects[i].name] = std::move(jp);
@@ -352,6 +379,7 @@ void writeScene(const Animation& animation, const fs::path& path) {
         root["animation"]["frames"] = std::move(frames);
     }
     writeFileAtomically(path, root.dump(2) + "\n");
+    meshes.keep();
 }
 
 }  // namespace cullide

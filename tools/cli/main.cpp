@@ -5,11 +5,18 @@
 #include "cullide/oracle/versions.h"
 #include "cullide/provenance.h"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
 #include <exception>
+#include <iostream>
+
+#include <poll.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace cullide::cli {
 namespace {
@@ -105,11 +112,9 @@ int run(int argc, char** argv) {
     }
 }
 
-}  // namespace
-
 // The last resort: anything else that escapes a command is a bug in cullide, reported as one
 // with its own exit status (70, EX_SOFTWARE), never an abort.
-int main(int argc, char** argv) {
+int runGuarded(int argc, char** argv) {
     try {
         return run(argc, argv);
     } catch (const cullide::InputError& e) {  // from an option's check while parsing
@@ -121,4 +126,32 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "cullide: internal error: an unknown exception\n");
     }
     return 70;
+}
+
+// Whether stdout is a pipe whose reader has gone (poll says POLLERR for a pipe without readers).
+bool stdoutReaderGone() {
+    struct stat st {};
+    if (fstat(STDOUT_FILENO, &st) != 0 || !S_ISFIFO(st.st_mode)) return false;
+    pollfd p{STDOUT_FILENO, POLLOUT, 0};
+    return poll(&p, 1, 0) == 1 && (p.revents & POLLERR);
+}
+
+// Output that never arrived (a full disk, a closed file) is an error like any other: the last
+// buffered bytes are written here, and a write that failed on the way sets the stream's error
+// flag (its cause is lost by then when a flush, say std::endl's, already reported it). A reader
+// that went away (EPIPE, where SIGPIPE is ignored; by default the signal has already ended the
+// process quietly) is no error: `cullide ... | head` wanted no more.
+int checkStdout(int status) {
+    int err = std::fflush(stdout) == 0 ? 0 : errno;  // first: std::cout writes through stdout's buffer
+    std::cout.flush();
+    const bool failed = err != 0 || std::ferror(stdout) || std::cout.fail();
+    if (!failed || err == EPIPE || (err == 0 && stdoutReaderGone())) return status;
+    std::fprintf(stderr, "cullide: error: stdout: %s\n", err ? std::strerror(err) : "a write failed");
+    return status == 70 ? status : 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    return checkStdout(runGuarded(argc, argv));
 }

@@ -22,9 +22,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <set>
@@ -501,11 +503,28 @@ std::vector<nlohmann::ordered_json> readRecords(const std::filesystem::path& pat
 
 namespace {
 
+// Both files or neither. The JSON lines first: when they cannot be written, nothing has changed;
+// when the CSV then cannot be, JSON lines this call created go again (rewritten ones stay: they
+// hold the records they held).
 void writeAll(const OutputPaths& p, const std::vector<nlohmann::ordered_json>& records) {
     std::string csv = csvHeader(), jsonl;
     for (const auto& r : records) csv += csvRow(r), jsonl += r.dump() + "\n";
-    writeFileAtomically(p.csv, csv);
+    std::error_code ec;
+    const bool jsonlWasThere = std::filesystem::exists(p.jsonl, ec);
     writeFileAtomically(p.jsonl, jsonl);
+    try {
+        writeFileAtomically(p.csv, csv);
+    } catch (const InputError&) {
+        if (!jsonlWasThere) std::filesystem::remove(p.jsonl, ec);
+        throw;
+    }
+}
+
+// A record appended to one output: its write checked, so a full disk stops the study by name
+// instead of losing records unnoticed.
+void append(std::ofstream& out, const std::filesystem::path& path, const std::string& line) {
+    out << line << std::flush;
+    if (!out) throw InputError(path.string(), std::string("cannot write: ") + std::strerror(errno));
 }
 
 }  // namespace
@@ -527,7 +546,8 @@ size_t runStudy(const StudyOptions& opt) {
         if (!done.count(c.id())) todo.push_back(c);
 
     std::ofstream csv(paths.csv, std::ios::app), jsonl(paths.jsonl, std::ios::app);
-    if (!csv || !jsonl) throw InputError(paths.csv.string(), "cannot append to the study output");
+    for (const auto& [stream, path] : {std::pair{&csv, paths.csv}, std::pair{&jsonl, paths.jsonl}})
+        if (!*stream) throw InputError(path.string(), std::string("cannot append: ") + std::strerror(errno));
 
     std::string sceneKey;
     Scene scene;
@@ -549,8 +569,8 @@ size_t runStudy(const StudyOptions& opt) {
         if (!backend) backend = raster::makeBackend(c.backend, c.threads);
         nlohmann::ordered_json r = runOne(c, scene, truth.get(), opt.spec.repeats, *backend);
         if (!opt.command.empty()) r["command"] = opt.command;
-        csv << csvRow(r) << std::flush;
-        jsonl << r.dump() << "\n" << std::flush;
+        append(csv, paths.csv, csvRow(r));
+        append(jsonl, paths.jsonl, r.dump() + "\n");
         if (opt.onRecord) {
             const Progress::Pause pause = bar.pause();  // its lines on stdout
             opt.onRecord(r);
