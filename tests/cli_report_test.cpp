@@ -192,3 +192,44 @@ TEST(Cli, ReportRendersInChromium) {
     EXPECT_EQ(be32(20), 2400u);
     EXPECT_GT(png.size(), 50000u) << "a blank page";
 }
+
+// Trap: `plot` and `report` on files that are no study output (not text, other columns, a header
+// only, a cell that is no number, a row cut short, JSON of another kind) ending in a Python
+// traceback (exit 1) or drawn as data (a NaN time, a cut last line), or a file without records
+// "plotted" with exit 0. Each is exit status 2 with `cullide: error: FILE: CAUSE`, refused before
+// anything is drawn.
+TEST(Cli, PlotAndReportRefuseWhatIsNoStudy) {
+    if (!haveMatplotlib()) GTEST_SKIP() << "no matplotlib for /usr/bin/python3";
+    const fs::path d = freshDir("plot_bad");
+    const std::string header = "index,id,scene,frame,triangles,method,time_ms,calls,pcs,colliding\n";
+    const std::pair<std::string, std::string> files[] = {
+        {"binary.csv", std::string("\x89PNG\r\n\x1a\n\x00\x00", 10)},
+        {"other.csv", "a,b,c\n1,2,3\n"},
+        {"header_only.csv", header},
+        {"nan.csv", header + "0,a1,bunny:500,0,500,modified,12.5,3,40,\n1,a2,bunny:500,0,500,original,nan,1,50,\n"},
+        {"short_row.csv", header + "0,a1,bunny:500,0,500\n1,a2,bunny:500,0,500,original,1.5,1,50,\n"},
+        {"cut.csv", header + "0,a1,bunny:500,0,500,modified,12.5,3,4"},
+        {"other.json", "{\"hello\": 1}\n"},
+    };
+    const std::pair<std::string, std::string> expected[] = {
+        {"binary.csv", "binary.csv: binary data"},
+        {"other.csv", "other.csv: not a study output: it has no column scene, method"},
+        {"header_only.csv", "header_only.csv: no study records (a header only)"},
+        {"nan.csv", "nan.csv: line 3: time_ms is 'nan', not a number"},
+        {"short_row.csv", "short_row.csv: line 2 has 5 cells where the header (line 1) has 10"},
+        {"cut.csv", "cut.csv: no study records"},
+        {"other.json", "other.json: a JSON object without 'frames' or 'benchmarks'"},
+    };
+    for (const auto& [name, bytes] : files) std::ofstream(d / name, std::ios::binary) << bytes;
+    for (size_t i = 0; i < std::size(expected); ++i) {
+        const auto& [name, message] = expected[i];
+        const char* command = i % 2 ? "report " : "plot ";  // one reader: half of each is enough
+        const CliRun r = runCli(command + quote((d / name).string()) + " -o " + quote((d / "out").string()));
+        EXPECT_EQ(r.status, 2) << command << name << ": " << r.output;
+        EXPECT_NE(r.output.find("cullide: error: " + (d / message).string()), std::string::npos) << r.output;
+        EXPECT_EQ(r.output.find("Traceback"), std::string::npos) << r.output;
+    }
+    const CliRun cut = runCli("plot " + quote((d / "cut.csv").string()) + " -o " + quote((d / "out").string()));
+    EXPECT_NE(cut.output.find("cut.csv: line 2 is cut"), std::string::npos) << cut.output;
+    EXPECT_FALSE(fs::exists(d / "out")) << "something was drawn";
+}

@@ -8,6 +8,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
@@ -59,9 +61,13 @@ int runPlotScript(const std::vector<std::string>& inputs, const std::vector<std:
                      argv[0]);
         _exit(2);
     }
+    // The script's exit status is the command's: 2 with its own `cullide: error:` line for bad input.
     int status = 0;
-    waitpid(pid, &status, 0);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 2;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
+    if (WIFEXITED(status)) return WEXITSTATUS(status);
+    std::fprintf(stderr, "cullide: error: plot: %s ended by signal %d\n", python.c_str(),
+                 WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    return 2;
 }
 
 void addPlotCommand(CLI::App& app, Action& action) {

@@ -15,8 +15,11 @@ Inputs, recognised by content:
 Study charts: one colour per method, one marker per combination of the other axes that vary,
 scenes by name ("bunny 5k", a file's name), a legend instead of per-point labels, log axes where
 values span a decade or more.
+Every input is read and checked first (inputs): one that is none of these, or a record whose
+numbers are not numbers, is `cullide: error: FILE: CAUSE` and exit status 2, nothing drawn.
 Needs matplotlib and numpy (Debian: /usr/bin/python3 with python3-matplotlib).
 """
-# The modules: load (reading the inputs), output (saving a chart), encodings (the study charts'
+# The modules: load (reading files: text, CSV, JSON lines, JSON), inputs (what each input must
+# hold, checked), output (saving a chart, the lines on stdout), encodings (the study charts'
 # colours, markers, scene names and per-scene summaries), study_charts, paper_figures (Figures 8-11),
 # stability_charts, bench_charts, report (`cullide report`'s page) and cli (the command line).

@@ -1,18 +1,45 @@
 """The command line of `cullide plot` and `cullide report` (tools/plot.py runs main): each input
-drawn by the charts its content calls for, or (--report) the report page."""
+drawn by the charts its content calls for, or (--report) the report page. An input that is none
+of those the package reads, or an output that cannot be written, is `cullide: error: PATH: CAUSE`
+on stderr and exit status 2, as for every cullide command. Every input is read and checked
+before matplotlib is loaded and anything is written: bad input is refused at once."""
 import argparse
-import json
-import os
 import sys
 
 from . import __doc__ as DESCRIPTION
-from .bench_charts import plot_benchmark
-from .encodings import METHOD
-from .load import read_csv
-from .paper_figures import plot_prune_json
-from .report import write_report
-from .stability_charts import plot_stability
-from .study_charts import plot_study
+from .inputs import read_input, read_report_inputs
+from .load import InputError
+
+
+def charts(method):
+    """The chart modules (matplotlib), the per-call charts' method set."""
+    from . import bench_charts, encodings, output, paper_figures, stability_charts, study_charts
+    if method:
+        encodings.METHOD.update(name=method, chosen=True)
+    return bench_charts, output, paper_figures, stability_charts, study_charts
+
+
+def plot(inputs, out, method):
+    read = [(path, *read_input(path)) for path in inputs]
+    bench_charts, output, paper_figures, stability_charts, study_charts = charts(method)
+    output.make_folder(out)
+    for path, kind, data in read:
+        if kind == "study":
+            study_charts.plot_study_rows(data, out)
+        elif kind == "stability":
+            stability_charts.plot_stability(data, out)
+        elif kind == "prune":
+            paper_figures.plot_prune_json(data, path, out)
+        else:
+            bench_charts.plot_benchmark(data, path, out)
+    return 0
+
+
+def report(inputs, out, method):
+    rows = read_report_inputs(inputs)
+    charts(method)
+    from .report import write_report
+    return write_report(rows, inputs, out)
 
 
 def main():
@@ -22,29 +49,11 @@ def main():
     ap.add_argument("--method", help="method of the per-call charts (Figures 9-11; default: modified)")
     ap.add_argument("--report", action="store_true", help="write OUT/report.html instead of the charts")
     a = ap.parse_args()
-    if a.method:
-        METHOD.update(name=a.method, chosen=True)
-    if a.report:
-        return write_report(a.inputs, a.out)
-    os.makedirs(a.out, exist_ok=True)
-    for path in a.inputs:
-        if path.endswith(".json"):
-            with open(path) as f:
-                j = json.load(f)
-            if "benchmarks" in j:
-                plot_benchmark(j, path, a.out)
-            elif "frames" in j:
-                plot_prune_json(j, path, a.out)
-            else:
-                print(f"{path}: not a prune --json or Google Benchmark file", file=sys.stderr)
-                return 2
-        elif path.endswith(".csv") or path.endswith(".jsonl"):
-            head = read_csv(path)[:1] if path.endswith(".csv") else []
-            if head and "sweep" in head[0]:
-                plot_stability(read_csv(path), a.out)
-            else:
-                plot_study(path, a.out)
-        else:
-            print(f"{path}: expected .csv, .jsonl or .json", file=sys.stderr)
-            return 2
-    return 0
+    try:
+        return (report if a.report else plot)(a.inputs, a.out, a.method)
+    except InputError as e:
+        message = str(e)
+    except OSError as e:  # an output (or input) the system refuses, named by the path it gave
+        message = f"{e.filename if e.filename is not None else 'plot'}: {e.strerror or e}"
+    print(f"cullide: error: {message}", file=sys.stderr)
+    return 2

@@ -8,9 +8,9 @@ from collections import defaultdict
 
 import matplotlib.ticker
 
+from .inputs import CAUSES
 from .load import num
 
-CAUSES = ["depth_rounding", "sampling", "edge_on", "untested", "unexplained"]
 METHOD_COLORS = {"original": "tab:blue", "modified": "tab:orange", "reliable": "tab:green"}
 OTHER_COLORS = ["tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan", "tab:red"]
 MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*", "<", ">", "h", "p"]

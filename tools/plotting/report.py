@@ -2,12 +2,11 @@
 scripts), well-formed (every element closed, text escaped), so that it can be mailed, archived
 and parsed by a test."""
 import os
-import sys
 from collections import defaultdict
 
 from .encodings import AXES, ordered, pareto, scene_configs, scene_name
-from .load import num, read_csv, read_study
-from .output import SAVE
+from .load import num
+from .output import SAVE, make_folder, say
 from .study_charts import plot_study_rows
 
 
@@ -112,11 +111,11 @@ def provenance_section(rows, inputs):
             continue
         for k in keys:
             if k in p:
-                v = ", ".join(p[k]) if isinstance(p[k], list) else str(p[k])
+                v = ", ".join(map(str, p[k])) if isinstance(p[k], list) else str(p[k])
                 if v not in values[k]:
                     values[k].append(v)
         if "date" in p:
-            dates.append(p["date"])
+            dates.append(str(p["date"]))
     table_rows = [[cell(k.replace("_", " ")), cell("; ".join(values[k]))] for k in keys if values[k]]
     if dates:
         table_rows.append([cell("dates (UTC)"), cell(f"{min(dates)} to {max(dates)}")])
@@ -132,7 +131,7 @@ def command_section(rows):
     commands = defaultdict(int)
     for r in rows:
         c = r.get("command") if isinstance(r, dict) else None
-        if c:
+        if isinstance(c, str) and c:
             commands[c] += 1
     if not commands:
         return ('<p class="note" id="no-command">The command is not recorded in these results (a study output '
@@ -163,24 +162,11 @@ def runs_section(rows):
                                                              "false prunes"], table_rows, "runs")
 
 
-def write_report(inputs, out):
+def write_report(rows, inputs, out):
+    """OUT/report.html of the records `rows` (inputs.read_report_inputs) read from `inputs`."""
     import base64
     import datetime
     import tempfile
-    rows = []
-    for path in inputs:
-        if not (path.endswith(".csv") or path.endswith(".jsonl")):
-            print(f"cullide: error: {path}: a report is made of study outputs (.csv or .jsonl)", file=sys.stderr)
-            return 2
-        head = read_csv(path)[:1] if path.endswith(".csv") else []
-        if head and "sweep" in head[0]:
-            print(f"cullide: error: {path}: a stability sweep, not a study output", file=sys.stderr)
-            return 2
-        got = read_study(path)
-        if not got or "scene" not in got[0] or "method" not in got[0]:
-            print(f"cullide: error: {path}: no study records", file=sys.stderr)
-            return 2
-        rows += got
     SAVE.update(formats=("png",), print=False)
     with tempfile.TemporaryDirectory() as tmp:
         made = plot_study_rows(rows, tmp)
@@ -210,10 +196,15 @@ def write_report(inputs, out):
         '<h2 id="charts">Charts</h2>\n' + ("".join(figures) or '<p class="note">No charts.</p>\n') +
         '<h2 id="runs">All runs</h2>\n<details><summary>' + f"{len(rows)} runs" + "</summary>\n" +
         runs_section(rows) + "</details>\n</body>\n</html>\n")
-    os.makedirs(out, exist_ok=True)
+    make_folder(out)
     path = os.path.join(out, "report.html")
-    with open(path + ".tmp", "w", encoding="utf-8") as f:
-        f.write(page)
-    os.replace(path + ".tmp", path)
-    print(path)
+    try:  # the page whole or not at all
+        with open(path + ".tmp", "w", encoding="utf-8") as f:
+            f.write(page)
+        os.replace(path + ".tmp", path)
+    except OSError:
+        if os.path.exists(path + ".tmp"):
+            os.remove(path + ".tmp")
+        raise
+    say(path)
     return 0

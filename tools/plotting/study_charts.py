@@ -4,7 +4,7 @@ import sys
 
 from .encodings import (CAUSES, MARKERS, common_text, config_text, grid, legend_handles, log_if_spread,
                         method_color, ordered, pareto, scene_configs, scene_name, varying_axes)
-from .load import num, read_study
+from .load import num
 from .output import plt, save
 from .paper_figures import figure8, per_call_charts
 
@@ -129,11 +129,3 @@ def plot_study_rows(rows, out):
     made = [speed_vs_accuracy(rows, out), figure8(rows, out), causes_chart(rows, out)]
     made += per_call_charts(rows, out)
     return [m for m in made if m]
-
-
-def plot_study(path, out):
-    rows = read_study(path)
-    if not rows:
-        print(f"{path}: no records", file=sys.stderr)
-        return []
-    return plot_study_rows(rows, out)
