@@ -97,6 +97,41 @@ TEST(Cli, AbsurdOptionsAreRefused) {
     EXPECT_FALSE(fs::exists(d / "s.json")) << "a refused command wrote its output";
 }
 
+// Trap: a number on the command line wrapped, clamped, NaN or half read (CLI11 takes "nan" for a
+// double and wraps -1 for an unsigned; sscanf wrapped 4294967396 to 100): every number an option
+// takes goes through the one strict parser, and a bad one is exit status 2 with the option and
+// the cause, before any work and with nothing written. One row per class and per way in
+// (an option's value, a part of a value, a list item, a study).
+TEST(Cli, NumbersAreReadStrictly) {
+    const fs::path d = freshDir("numbers");
+    const std::string cow = quote(kData + "/meshes/cow.off"), out = quote((d / "s.json").string());
+    const std::string csv = quote((d / "s.csv").string());
+    const std::pair<std::string, std::string> cases[] = {
+        {"prune " + cow + " --resolution 4294967396", "option --resolution: 4294967396 is out of range (1 to 16384)"},
+        {"study --scenes bunny:100 --resolutions 4294967396 -o " + csv, "option --resolutions: 4294967396 is out"},
+        {"make-scene sheets --tilt nan -o " + out, "option --tilt: 'nan' is not a finite number"},
+        {"tune " + cow + " --budget-ms nan", "option --budget-ms: 'nan' is not a finite number"},
+        {"trace record " + cow + " -o " + quote((d / "t.trace").string()) + " --depth-margin inf",
+         "option --depth-margin: 'inf' is not a finite number"},
+        {"prune " + cow + " --hierarchy random --seed -1", "option --seed: -1 is out of range"},
+        {"prune " + cow + " --hierarchy random --seed 18446744073709551616",
+         "option --seed: 18446744073709551616 is out of range"},
+        {"trace compare a.trace r.json --worst -1", "option --worst: -1 is out of range"},
+        {"prune " + cow + " --max-viewport 12abc", "option --max-viewport: '12abc' is not an integer"},
+        {"prune " + cow + " --max-viewport 63", "option --max-viewport: 63 is out of range (64 to 16384)"},
+        {"make-scene cylinders --count 1e3 -o " + out, "option --count: '1e3' is not an integer"},
+        {"study --scenes bunny:100 --leaf-sizes 16 -1 -o " + csv, "option --leaf-sizes: -1 is out of range"},
+        {"study --scenes bunny:100 --shard 0/18446744073709551617 -o " + csv, "option --shard"},
+        {"info --frame 99999999999999999999 " + cow, "option --frame: 99999999999999999999 is out of range"},
+    };
+    for (const auto& [args, message] : cases) {
+        const CliRun r = runCli(args);
+        EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+        EXPECT_NE(r.output.find("cullide: error: " + message), std::string::npos) << args << ": " << r.output;
+    }
+    EXPECT_TRUE(fs::is_empty(d)) << "a refused command wrote its output";
+}
+
 // Same kind, options and seed: the same bytes in every file written (the generators use no
 // unordered containers, threads or implementation-defined distributions). A different seed
 // changes the randomized scene.

@@ -1,11 +1,14 @@
 // The one option parser (core/include/cullide/options.h): text -> CullideOptions, and errors that
-// name the option as the user typed it.
+// name the option as the user typed it; and the one number parser under it (parse_number.h).
 #include "cullide/options.h"
 
 #include "cullide/error.h"
+#include "cullide/parse_number.h"
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <limits>
 #include <string>
 
 using namespace cullide;
@@ -222,4 +225,90 @@ TEST(Options, ExactSwitch) {
     names.exactSwitch = "spec.json: field 'exact_switches'";
     EXPECT_NE(messageOf([&] { parseCullideOptions(t, names); }).find("spec.json: field 'exact_switches'"),
               std::string::npos);
+}
+
+// --- Numbers as typed (parse_number.h) ---
+
+// Trap: a number past its type's limits wrapped or clamped into range (sscanf's %d took
+// 4294967396 as 100, strtoull clamps 2^64 to 2^64 - 1), in the option parser as anywhere. The
+// limits themselves are read exactly; one past them is out of range, with the text as typed.
+TEST(Numbers, OverflowIsOutOfRangeNotWrapped) {
+    EXPECT_EQ(messageOf([] { parseResolution("4294967396"); }),
+              "option --resolution: 4294967396 is out of range (1 to 16384)");
+    EXPECT_EQ(messageOf([] { parseResolution("640x4294967776"); }),
+              "option --resolution: 4294967776 is out of range (1 to 16384)");
+    constexpr uint64_t u64 = std::numeric_limits<uint64_t>::max();
+    constexpr int64_t i64 = std::numeric_limits<int64_t>::max();
+    EXPECT_EQ(parseNumber<uint64_t>("18446744073709551615", "S", 0, u64), u64);
+    EXPECT_EQ(messageOf([&] { parseNumber<uint64_t>("18446744073709551616", "S", 0, u64); }),
+              "S: 18446744073709551616 is out of range (0 to 18446744073709551615)");
+    EXPECT_EQ(parseNumber<int64_t>("-9223372036854775808", "F", -i64 - 1, i64), -i64 - 1);
+    EXPECT_NE(messageOf([&] { parseNumber<int64_t>("9223372036854775808", "F", 0, i64); }).find("out of range"),
+              std::string::npos);
+    EXPECT_NE(messageOf([] { parseNumber<int>("99999999999999999999999", "F", 0, 9); }).find("out of range"),
+              std::string::npos);
+    EXPECT_NE(messageOf([] { parseNumber("1e400", "T", 0.0, 59.0); }).find("out of range"), std::string::npos);
+    EXPECT_NE(messageOf([] { parseExactSwitch("99999999999999999999"); }).find("out of range"), std::string::npos);
+}
+
+// Trap: a negative number for an unsigned value read as a huge one (strtoull and CLI11 take -1 as
+// 2^64 - 1: a seed that wraps, `--worst -1` as "all").
+TEST(Numbers, NegativeForUnsignedIsOutOfRange) {
+    constexpr uint64_t u64 = std::numeric_limits<uint64_t>::max();
+    EXPECT_EQ(messageOf([&] { parseNumber<uint64_t>("-1", "option --seed", 0, u64); }),
+              "option --seed: -1 is out of range (0 to 18446744073709551615)");
+    EXPECT_NE(messageOf([] { parseNumber<size_t>("-18446744073709551615", "W", 0, 10); }).find("out of range"),
+              std::string::npos);
+    EXPECT_EQ(parseNumber<unsigned>("-0", "W", 0u, 10u), 0u);  // minus zero is zero
+    EXPECT_EQ(messageOf([] { checkRange(uint32_t(0), "option --leaf-size", 1u, kMaxLeafSize); }),
+              "option --leaf-size: 0 is out of range (1 to 1000000)");
+}
+
+// Trap: NaN passes every range check written `x < min || x > max` (make-scene's --tilt nan then
+// aborted inside a generator); an infinity is a number only where the range includes it.
+TEST(Numbers, NanAndInfinityAreRefused) {
+    for (const char* bad : {"nan", "NaN", "-nan", "nan(1)", "inf", "-inf", "Infinity", "+inf"})
+        EXPECT_NE(messageOf([&] { parseNumber(bad, "option --tilt", 0.0, 59.0); }).find("is not a finite number"),
+                  std::string::npos)
+            << bad;
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    EXPECT_EQ(parseReal("inf", "X", 0, inf), inf);
+    EXPECT_NE(messageOf([&] { parseReal("nan", "X", -inf, inf); }), "");
+    EXPECT_NE(messageOf([] { parseResolutionSetting("auto:nan"); }).find("finite"), std::string::npos);
+    EXPECT_NE(messageOf([] { parseDirections("1 nan 0"); }).find("finite"), std::string::npos);
+}
+
+// Trap: text after the number ignored or half read (stoul("12abc") is 12, %lf reads "1.5x" as 1.5),
+// spaces, hexadecimal, an exponent or a fraction where an integer is wanted. Each is "not an
+// integer" / "not a number" quoting the text, cut short when it is long.
+TEST(Numbers, TrailingCharactersAreRefused) {
+    for (const char* bad : {"12abc", "5 ", " 5", "0x10", "1e3", "5.0", "", "-", "+", "+-1", "--1", "1,5", "٣"})
+        EXPECT_NE(messageOf([&] { parseNumber(bad, "N", 0, 100000); }).find("is not an integer"), std::string::npos)
+            << "'" << bad << "'";
+    for (const char* bad : {"1.5x", "", ".", "e5", "1e", "+-1", "0x1p3", "1 "})
+        EXPECT_NE(messageOf([&] { parseNumber(bad, "R", 0.0, 1e9); }).find("is not a number"), std::string::npos)
+            << "'" << bad << "'";
+    EXPECT_EQ(parseNumber("+7", "N", 0, 9), 7);
+    EXPECT_EQ(parseNumber("2.5e-1", "R", 0.0, 1.0), 0.25);
+    EXPECT_EQ(parseNumber(".5", "R", 0.0, 1.0), 0.5);
+    const std::string huge(100000, '7');
+    EXPECT_LT(messageOf([&] { parseNumber(huge + "x", "N", 0, 9); }).size(), 100u) << "the whole text quoted";
+    for (const char* bad : {"500x", "x500", "12abc", "500x500x", "5 00"})
+        EXPECT_NE(messageOf([&] { parseResolution(bad); }).find("cannot read"), std::string::npos) << bad;
+}
+
+// Trap: a range check before the number is read (on a wrapped value), bounds off by one, or a
+// different wording per caller. The bounds are inclusive and the message names both.
+TEST(Numbers, RangeIsCheckedAfterReading) {
+    EXPECT_EQ(parseNumber("1", "V", 1, 16384), 1);
+    EXPECT_EQ(parseNumber("16384", "V", 1, 16384), 16384);
+    EXPECT_EQ(messageOf([] { parseNumber("16385", "V", 1, 16384); }), "V: 16385 is out of range (1 to 16384)");
+    EXPECT_EQ(messageOf([] { parseNumber("0", "V", 1, 16384); }), "V: 0 is out of range (1 to 16384)");
+    EXPECT_EQ(parseNumber("59", "T", 0.0, 59.0), 59.0);
+    EXPECT_EQ(messageOf([] { parseNumber("59.5", "T", 0.0, 59.0); }), "T: 59.5 is out of range (0 to 59)");
+    EXPECT_EQ(messageOf([] { parseNumber("-1e-9", "T", 0.0, 59.0); }), "T: -1e-9 is out of range (0 to 59)");
+    EXPECT_EQ(messageOf([] { parseNumber("2e6", "M", 0.0, 1e6); }), "M: 2e6 is out of range (0 to 1e+06)");
+    EXPECT_EQ(messageOf([] { parseDirections("10001"); }),
+              "option --directions: 10001 is out of range (1 to 10000)");
+    EXPECT_EQ(messageOf([] { checkThreads(-1); }), "option --threads: -1 is out of range (0 to 1024)");
 }

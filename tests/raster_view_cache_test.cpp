@@ -166,5 +166,43 @@ TEST(Differential, ViewCacheAtTheLayoutsLimit) {
     }
 }
 
+// Trap: a call drawn in tiles of a few pixels (`prune --max-viewport 4`) sets a view per tile and
+// captures each; the cache must find each tile's own fragments among hundreds (never a
+// neighbour's, whose view differs only in its origin) and must not search them one by one (the
+// time of every list grew with the tiles before it: 4 px tiles never finished). Every tile of a
+// 60 x 44 view at 4 px, captured, then replayed: the results of the tiles against the scalar path
+// on the whole view, and every replay a replay.
+TEST(Differential, ViewCacheFindsEachOfManyTiles) {
+    const int W = 60, H = 44, side = 4;
+    const RandomScene s = randomScene(71, W, H, 120, 0);
+    const uint32_t n = uint32_t(s.geo.triangles.size());
+    CommandList whole;  // Cullide's pattern: every triangle drawn twice, with a query
+    whole.clear(1.0);
+    for (int pass = 0; pass < 2; ++pass) {
+        whole.beginQuery();
+        whole.draw(0, n);
+        whole.endQuery();
+    }
+    const OrthoView view = windowView(W, H);
+    CpuBackendOptions ref;
+    ref.scalarReference = true;
+    auto a = backendFor(s.geo, view, ref), b = backendFor(s.geo, view, {});
+    const std::vector<uint64_t> expected = a->execute(whole);
+    std::vector<OrthoView> tiles;
+    for (int y = 0; y < H; y += side)
+        for (int x = 0; x < W; x += side) tiles.push_back(view.tile(x, y, side, side));
+    for (bool replay : {false, true}) {
+        std::vector<uint64_t> sum(expected.size(), 0);
+        for (const OrthoView& tile : tiles) {
+            b->setView(tile);
+            const std::vector<uint64_t> r = b->execute(whole);
+            ASSERT_EQ(r.size(), sum.size());
+            for (size_t q = 0; q < r.size(); ++q) sum[q] += r[q];
+            EXPECT_EQ(b->lastReplayedView(), replay) << tile.originX << "," << tile.originY;
+        }
+        EXPECT_EQ(sum, expected) << (replay ? "replayed" : "captured");
+    }
+}
+
 }  // namespace
 }  // namespace cullide::raster

@@ -2,10 +2,11 @@
 #include "cullide/options.h"
 
 #include "cullide/error.h"
+#include "cullide/parse_number.h"
 
 #include <algorithm>
 #include <cctype>
-#include <cstdio>
+#include <limits>
 #include <sstream>
 #include <tuple>
 
@@ -26,21 +27,19 @@ auto named(const std::string& name, Parse&& parse) {
     }
 }
 
+bool allDigits(std::string_view text) {
+    return !text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
 }  // namespace
 
 std::pair<int, int> parseResolution(const std::string& text, const std::string& name) {
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) == 3 && (x == 'x' || x == 'X')) {
-    } else if (std::sscanf(text.c_str(), "%d%c", &w, &extra) == 1) {
-        h = w;
-    } else {
+    const size_t x = text.find_first_of("xX");
+    const std::string_view w = std::string_view(text).substr(0, x);
+    const std::string_view h = x == std::string::npos ? w : std::string_view(text).substr(x + 1);
+    if (!allDigits(w) || !allDigits(h))
         throw InputError(name, "cannot read '" + text + "' (expected N or WxH, e.g. 500 or 640x480)");
-    }
-    if (w < 1 || h < 1 || w > kMaxViewportSide || h > kMaxViewportSide)
-        throw InputError(name,
-                         "'" + text + "': each side must be 1 to " + std::to_string(kMaxViewportSide) + " pixels");
-    return {w, h};
+    return {parseNumber(w, name, 1, kMaxViewportSide), parseNumber(h, name, 1, kMaxViewportSide)};
 }
 
 ResolutionSetting parseResolutionSetting(const std::string& text, const std::string& name) {
@@ -51,16 +50,10 @@ ResolutionSetting parseResolutionSetting(const std::string& text, const std::str
     }
     r.autoCoverage = kDefaultAutoCoverage;
     if (text == "auto") return r;
-    const std::string k = text.size() > 5 && text[4] == ':' ? text.substr(5) : std::string();
-    double value = 0;
-    char extra = 0;
-    if (k.empty() || k.find_first_not_of("0123456789.") != std::string::npos ||
-        std::sscanf(k.c_str(), "%lf%c", &value, &extra) != 1)
+    if (text.size() < 5 || text[4] != ':')
         throw InputError(name, "cannot read '" + text + "' (expected auto or auto:K with a number K, e.g. auto:2)");
-    if (!(value > 0 && value <= kMaxAutoCoverage))
-        throw InputError(
-            name,
-            "'" + text + "': K must be more than 0 and at most " + std::to_string(int(kMaxAutoCoverage)) + " pixels");
+    const double value = parseReal(std::string_view(text).substr(5), name, 0, kMaxAutoCoverage);
+    if (value == 0) throw InputError(name, "'" + text + "': K must be more than 0");
     r.autoCoverage = value;
     return r;
 }
@@ -82,10 +75,7 @@ std::vector<Vec3d> parseDirections(const std::string& text, const std::string& n
                                  "coherent:x,-y,z)");
         return parseDirections(list, name);
     }
-    if (!text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; })) {
-        if (text.size() > 6) throw InputError(name, "too many directions: " + text);
-        return named(name, [&] { return spreadDirections(uint32_t(std::stoul(text))); });
-    }
+    if (allDigits(text)) return spreadDirections(parseNumber<uint32_t>(text, name, 1, kMaxSpreadDirections));
     std::vector<Vec3d> dirs;
     const char separator = text.find(';') != std::string::npos ? ';' : ',';
     std::stringstream items(text);
@@ -101,12 +91,15 @@ std::vector<Vec3d> parseDirections(const std::string& text, const std::string& n
         else if (item == "z" || item == "+z") d = Vec3d(0, 0, 1);
         else if (item == "-z") d = Vec3d(0, 0, -1);
         else {
-            std::stringstream nums(item);
-            std::string rest;
-            if (!(nums >> d.x() >> d.y() >> d.z()) || (nums >> rest))
+            std::stringstream words(item);
+            std::vector<std::string> xyz;
+            for (std::string w; words >> w;) xyz.push_back(w);
+            if (xyz.size() != 3)
                 throw InputError(name,
                                  "cannot read direction '" + item +
                                      "' (expected axes, a count, or a list like x,-y,z or '1 0 0;0 1 1')");
+            constexpr double big = std::numeric_limits<double>::max();
+            for (int k = 0; k < 3; ++k) d[k] = parseReal(xyz[size_t(k)], name, -big, big);
         }
         if (!d.allFinite() || d.norm() == 0) throw InputError(name, "direction '" + item + "' is zero or not finite");
         dirs.push_back(d.normalized());
@@ -122,13 +115,10 @@ ExactSwitch parseExactSwitch(const std::string& text, const std::string& name) {
         s.kind = ExactSwitchKind::Auto;
         return s;
     }
-    if (text.empty() || text.size() > 13 || text.find_first_not_of("0123456789") != std::string::npos)
+    if (!allDigits(text))
         throw InputError(name, "cannot read '" + text + "' (expected never, auto or a triangle count N)");
-    const unsigned long long n = std::stoull(text);
-    if (n < 1 || n > 1'000'000'000'000ull)
-        throw InputError(name, "'" + text + "': the triangle count must be 1 to 10^12");
     s.kind = ExactSwitchKind::Below;
-    s.triangles = size_t(n);
+    s.triangles = size_t(parseNumber<unsigned long long>(text, name, 1, 1'000'000'000'000ull));
     return s;
 }
 
@@ -142,16 +132,8 @@ CullideOptions parseCullideOptions(const OptionText& text, const OptionNames& na
     o.directionMode = parseDirectionMode(text.directions);
     o.hierarchy.kind = named(names.hierarchy, [&] { return parseHierarchyKind(text.hierarchy); });
     o.views = named(names.views, [&] { return parseViewMode(text.views); });
-    if (text.leafSize < 1 || text.leafSize > kMaxLeafSize)
-        throw InputError(names.leafSize,
-                         std::to_string(text.leafSize) + ": the leaf size must be 1 to " +
-                             std::to_string(kMaxLeafSize) + " triangles");
-    if (text.branching < kMinBranching || text.branching > kMaxBranching)
-        throw InputError(names.branching,
-                         std::to_string(text.branching) + ": the branching must be " + std::to_string(kMinBranching) +
-                             " to " + std::to_string(kMaxBranching));
-    o.hierarchy.leafSize = text.leafSize;
-    o.hierarchy.branching = text.branching;
+    o.hierarchy.leafSize = checkRange(text.leafSize, names.leafSize, 1u, kMaxLeafSize);
+    o.hierarchy.branching = checkRange(text.branching, names.branching, kMinBranching, kMaxBranching);
     o.hierarchy.seed = text.seed;
     o.exactSwitch = parseExactSwitch(text.exactSwitch, names.exactSwitch);
     o.validate();  // nothing left to refuse: the checks above cover it
@@ -166,17 +148,13 @@ DepthFormat DepthFormat::parse(const std::string& text) {
     std::string digits = t;
     if (digits.rfind("unorm", 0) == 0) digits = digits.substr(5);
     else if (digits.rfind("d", 0) == 0) digits = digits.substr(1);
-    const bool numeric = !digits.empty() && digits.size() <= 2 &&
-        std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
-    if (!numeric)
+    if (!allDigits(digits) || digits.size() > 2)
         throw InputError("depth format", "'" + text + "' is not a depth format (use 8..32, d24, unorm16, float, d32f)");
-    return unorm(std::stoi(digits));
+    return unorm(parseNumber(std::string_view(digits), "depth format", 0, 99));
 }
 
 int checkThreads(long long threads, const std::string& name) {
-    if (threads < 0 || threads > kMaxThreads)
-        throw InputError(name, std::to_string(threads) + " is not 0 (all cores) to " + std::to_string(kMaxThreads));
-    return int(threads);
+    return int(checkRange(threads, name, 0LL, (long long)kMaxThreads));
 }
 
 DepthFunc parseDepthFunc(const std::string& text, const std::string& name) {

@@ -15,11 +15,13 @@
 namespace cullide::python {
 namespace {
 
+// An int as its decimal text, so that the option parser sees the number as given (a cast to a
+// C++ integer first would wrap or overflow).
 std::string resolutionText(const py::object& r) {
     if (py::isinstance<py::str>(r)) return r.cast<std::string>();
     if (py::isinstance<py::bool_>(r) || !py::isinstance<py::int_>(r))
         fail("argument resolution: give an integer N or a text 'N', 'WxH', 'auto' or 'auto:K'");
-    return std::to_string(r.cast<long long>());
+    return py::str(r);
 }
 
 std::unique_ptr<DepthBackend> makeBackendChecked(const std::string& name, int threads) {
@@ -30,9 +32,9 @@ std::unique_ptr<DepthBackend> makeBackendChecked(const std::string& name, int th
 }
 
 PyResult prune(const PyScene& s, const std::string& method, const py::object& resolution, const std::string& depth,
-               const std::string& directions, const std::string& hierarchy, long long leafSize, long long branching,
-               long long seed, const std::string& backendName, int threads, long frame, const std::string& views,
-               const std::string& exactSwitch) {
+               const std::string& directions, const std::string& hierarchy, const py::object& leafSizeArg,
+               const py::object& branchingArg, const py::object& seedArg, const std::string& backendName,
+               const py::object& threadsArg, long frame, const std::string& views, const std::string& exactSwitch) {
     OptionText text;
     text.method = method;
     text.resolution = resolutionText(resolution);
@@ -40,10 +42,10 @@ PyResult prune(const PyScene& s, const std::string& method, const py::object& re
     text.directions = directions;
     text.hierarchy = hierarchy;
     text.views = views;
-    text.leafSize = checkedCount(leafSize, "argument leaf_size");
-    text.branching = checkedCount(branching, "argument branching");
-    if (seed < 0) fail("argument seed: must be >= 0");
-    text.seed = uint64_t(seed);
+    text.leafSize = integerArgument(leafSizeArg, "argument leaf_size", 1u, kMaxLeafSize);
+    text.branching = integerArgument(branchingArg, "argument branching", kMinBranching, kMaxBranching);
+    text.seed = integerArgument(seedArg, "argument seed", uint64_t(0), UINT64_MAX);
+    const int threads = integerArgument(threadsArg, "argument threads", 0, kMaxThreads);
     text.exactSwitch = exactSwitch;
     PyResult r;
     r.options = parseCullideOptions(text, pythonNames());

@@ -15,11 +15,10 @@ void bindStudy(py::module_& m) {
         [](const std::vector<std::string>& scenes, const std::vector<std::string>& methods,
            const std::vector<std::string>& resolutions, const std::vector<std::string>& depths,
            const std::vector<std::string>& directions, const std::vector<std::string>& hierarchies,
-           const std::vector<uint32_t>& leafSizes, const std::vector<std::string>& backends,
-           const std::vector<int>& threads, int repeats, bool oracle, const std::string& out,
+           const std::vector<py::object>& leafSizes, const std::vector<std::string>& backends,
+           const std::vector<py::object>& threads, const py::object& repeats, bool oracle, const std::string& out,
            const std::vector<std::string>& views, const std::vector<std::string>& exactSwitches) {
             if (scenes.empty()) fail("argument scenes: no scenes");
-            if (repeats < 1) fail("argument repeats: must be >= 1");
             study::StudyOptions o;
             study::Spec& s = o.spec;
             s.names = pythonNames();
@@ -29,13 +28,17 @@ void bindStudy(py::module_& m) {
             if (views.empty()) fail("argument views: no view modes");
             s.views = views;
             s.scenes = scenes, s.methods = methods, s.resolutions = resolutions, s.depths = depths;
-            s.directions = directions, s.hierarchies = hierarchies, s.leafSizes = leafSizes;
-            s.backends = backends, s.threads = threads, s.repeats = repeats, s.oracle = oracle;
+            s.directions = directions, s.hierarchies = hierarchies;
+            s.leafSizes.clear(), s.threads.clear();
+            for (const py::object& l : leafSizes)
+                s.leafSizes.push_back(integerArgument(l, "argument leaf_sizes", 1u, kMaxLeafSize));
+            for (const py::object& t : threads) s.threads.push_back(integerArgument(t, "argument threads", 0, kMaxThreads));
+            s.repeats = integerArgument(repeats, "argument repeats", 1, 1000);
+            s.backends = backends, s.oracle = oracle;
             s.exactSwitches = exactSwitches, s.names.exactSwitch = "argument exact_switches";
             for (const std::string& b : backends)
                 if (!raster::isBackendName(b))
                     fail("argument backends: '" + b + "' is not a backend (" + raster::backendNameList() + ")");
-            for (int t : threads) checkedThreads(t);
             o.out = out;
             std::vector<std::string> records;
             o.onRecord = [&](const nlohmann::ordered_json& r) { records.push_back(r.dump()); };

@@ -120,14 +120,16 @@ Vec3d vec3(const py::handle& obj, const std::string& name) {
     return {v[0], v[1], v[2]};
 }
 
+std::string integerText(const py::handle& obj, const std::string& name) {
+    if (py::isinstance<py::str>(obj)) return obj.cast<std::string>();
+    if (py::isinstance<py::bool_>(obj) || !PyIndex_Check(obj.ptr()))
+        fail(name + ": " + std::string(py::str(py::type::handle_of(obj).attr("__name__"))) + " is not an integer");
+    return py::str(py::reinterpret_steal<py::object>(PyNumber_Index(obj.ptr())));
+}
+
 // A draw range bound from Python: 0..2^32-1 (CommandList then checks that first + count fits).
 uint32_t rangeValue(long long v, const std::string& name) {
     if (v < 0 || v > 0xffffffffLL) fail(name + ": " + std::to_string(v) + " is not 0..4294967295");
-    return uint32_t(v);
-}
-
-uint32_t checkedCount(long long v, const std::string& name) {
-    if (v < 0 || v > 4'000'000'000LL) fail(name + ": " + std::to_string(v) + " is out of range");
     return uint32_t(v);
 }
 

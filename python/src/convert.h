@@ -3,6 +3,7 @@
 #pragma once
 
 #include "cullide/mesh.h"
+#include "cullide/parse_number.h"
 #include "cullide/scene.h"
 
 #include <pybind11/numpy.h>
@@ -43,9 +44,18 @@ Mesh meshFromPython(const py::object& v, const py::object& f, const std::string&
 Transform transformFromPython(const py::object& obj, const std::string& name);
 // A sequence of three finite numbers.
 Vec3d vec3(const py::handle& obj, const std::string& name);
+// The decimal text of an integer argument: a Python int, anything with __index__ (numpy
+// integers), or a str as the user typed it; ValueError naming the argument for anything else
+// (a bool, a float, None).
+std::string integerText(const py::handle& obj, const std::string& name);
+// An integer argument read by the core's strict parser (cullide/parse_number.h) into [min, max]:
+// ValueError naming the argument otherwise, never a wrapped, clamped or truncated value.
+template <typename T>
+T integerArgument(const py::handle& obj, const std::string& name, T min, T max) {
+    return parseNumber(integerText(obj, name), name, min, max);
+}
+
 // A draw range bound from Python: 0..2^32-1 (CommandList then checks that first + count fits).
 uint32_t rangeValue(long long v, const std::string& name);
-// A count 0..4,000,000,000 (hierarchy sizes; the option parser then checks their own ranges).
-uint32_t checkedCount(long long v, const std::string& name);
 
 }  // namespace cullide::python

@@ -193,6 +193,16 @@ def test_prune_options_and_face_mask():
         ({"threads": -1}, "threads"),
         ({"frame": 5}, "frame"),
         ({"views": "cluster"}, "views"),
+        # Numbers through the core's strict parser: never wrapped (4294967396 was 100), clamped or cut.
+        ({"resolution": 4294967396}, "argument resolution: 4294967396 is out of range"),
+        ({"resolution": "4294967396"}, "argument resolution: 4294967396 is out of range"),
+        ({"resolution": 2**70}, "argument resolution: 1180591620717411303424 is out of range"),
+        ({"seed": -1}, "argument seed: -1 is out of range"),
+        ({"seed": 2**64}, "argument seed: 18446744073709551616 is out of range"),
+        ({"leaf_size": 2**32 + 16}, "argument leaf_size: 4294967312 is out of range"),
+        ({"leaf_size": "16x"}, "argument leaf_size: '16x' is not an integer"),
+        ({"leaf_size": 16.5}, "argument leaf_size: float is not an integer"),
+        ({"threads": 2**32}, "argument threads: 4294967296 is out of range"),
     ],
 )
 def test_prune_bad_options(kwargs, message):

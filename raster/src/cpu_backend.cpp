@@ -156,7 +156,9 @@ __attribute__((target("avx2"))) void transformVertices4(const Vec3f* p, const Or
 class CpuBackendImpl final : public CpuBackend {
 public:
     explicit CpuBackendImpl(const CpuBackendOptions& options)
-        : options_(options), arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {}
+        : options_(options),
+          arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic),
+          views_(options.viewCacheBytes) {}
 
     std::string describe() const override {
         std::string s = options_.scalarReference ? "cpu scalar reference" : "cpu reference";
@@ -444,7 +446,7 @@ private:
         makeEvents(list, walk);
         const detail::FragLayout layout =
             detail::FragLayout::of(triangles_.size(), options_.tileSize, view_.width, view_.height, view_.depth);
-        const bool capture = !viewsFull_ && options_.viewCacheBytes > 0 && layout.placeBits > 0 &&
+        const bool capture = views_.accepting() && layout.placeBits > 0 &&
             detail::replayable(list) && detail::drawsEverything(plain_, triangles_.size());
         detail::ViewFragments v;
         if (capture) {
@@ -455,14 +457,7 @@ private:
         runTiles(capture ? &v : nullptr);
         if (capture) {
             detail::captureFlags(plain_, triangles_.size(), v);
-            // Over the budget: kept out, and no more captures until the geometry changes (the views
-            // of one geometry are alike in size).
-            if (viewBytes_ + v.bytes() > options_.viewCacheBytes) {
-                viewsFull_ = true;
-            } else {
-                viewBytes_ += v.bytes();
-                views_.push_back(std::move(v));
-            }
+            views_.add(std::move(v));
         }
         return sumQueries(list, walk);
     }
@@ -470,9 +465,7 @@ private:
     // The captured fragments for the current view, when `list` may replay them.
     const detail::ViewFragments* cachedView(const CommandList& list) const {
         if (views_.empty() || !detail::replayable(list)) return nullptr;
-        for (const detail::ViewFragments& v : views_)
-            if (detail::sameView(v.view, view_)) return &v;
-        return nullptr;
+        return views_.find(view_);
     }
 
     // Steps 5-7 from captured fragments: no setup, no records.
@@ -483,11 +476,7 @@ private:
         return sumQueries(list, walk);
     }
 
-    void dropViews() {
-        std::vector<detail::ViewFragments>().swap(views_);
-        viewBytes_ = 0;
-        viewsFull_ = false;
-    }
+    void dropViews() { views_.clear(); }
 
     // Steps 3 and 4: records of the drawn triangles, binned to tiles.
     void setupRecords(const CommandList& list) {
@@ -562,11 +551,8 @@ private:
     SetupParams params_;
     std::vector<WinVertex> window_;
     std::vector<SnapVertex> snapped_;  // window_ snapped once per vertex (fast path)
-    // Captured fragments of the whole geometry per view (view_cache.h), their bytes, and whether
-    // a capture went over options_.viewCacheBytes.
-    std::vector<detail::ViewFragments> views_;
-    size_t viewBytes_ = 0;
-    bool viewsFull_ = false;
+    // Captured fragments of the whole geometry per view (view_cache.h), within options_.viewCacheBytes.
+    detail::ViewCache views_;
     bool replayedView_ = false;  // by the last execute()
     bool directRan_ = false;  // the last execute() took the direct path
     detail::DirectScratch direct_;

@@ -29,9 +29,11 @@ void addCullideOptions(CLI::App* sub, OptionText& o) {
                     "fit (one view per reducePCS call, fitted to the PCS) | clustered (one fitted view per group of "
                     "nodes whose projections overlap; docs/cullide.md#views-per-cluster)")
         ->capture_default_str();
-    sub->add_option("--leaf-size", o.leafSize, "Triangles per hierarchy leaf (1 to 1,000,000)")->capture_default_str();
-    sub->add_option("--branching", o.branching, "Children per hierarchy node (2 to 64)")->capture_default_str();
-    sub->add_option("--seed", o.seed, "Seed of the random hierarchy");
+    addNumber(sub, "--leaf-size", o.leafSize, "Triangles per hierarchy leaf (1 to 1,000,000)", 1u, kMaxLeafSize)
+        ->capture_default_str();
+    addNumber(sub, "--branching", o.branching, "Children per hierarchy node (2 to 64)", kMinBranching, kMaxBranching)
+        ->capture_default_str();
+    addNumber(sub, "--seed", o.seed, "Seed of the random hierarchy");
 }
 
 void checkCullideOptions(const CLI::App* sub, const OptionText& o) {
@@ -48,8 +50,8 @@ void addProgressOption(CLI::App* sub, ProgressMode& mode) {
 }
 
 CLI::Option* addThreadsOption(CLI::App* sub, int& threads, const std::string& what) {
-    return sub->add_option("--threads", threads, what + " (0: all cores; 1 to " + std::to_string(kMaxThreads) + ")")
-        ->check(CLI::Range(0, kMaxThreads));
+    return addNumber(sub, "--threads", threads, what + " (0: all cores; 1 to " + std::to_string(kMaxThreads) + ")", 0,
+                     kMaxThreads);
 }
 
 FrameHooks passProgress(Progress& bar, const std::string& frameName, size_t done, size_t directions) {

@@ -105,7 +105,7 @@ void addInfoCommand(CLI::App& app, Action& action) {
                                        "degenerate triangles, components, duplicate vertices");
     sub->add_option("paths", o->paths, "Scene files (.json) or meshes (.obj .off .ply .stl)")->required();
     sub->add_flag("--json", o->json, "Print JSON for machines instead of text");
-    sub->add_option("--frame", o->frame, "Animation frame to describe (default 0)")->check(CLI::NonNegativeNumber);
+    addNumber(sub, "--frame", o->frame, "Animation frame to describe (default 0)", 0L, std::numeric_limits<long>::max());
     sub->callback([o, &action] { action = [o] { return runInfo(*o); }; });
 }
 

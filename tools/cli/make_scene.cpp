@@ -91,21 +91,20 @@ void addMakeSceneCommand(CLI::App& app, Action& action) {
         ->required()
         ->transform(CLI::CheckedTransformer(kinds, CLI::ignore_case));
     sub->add_option("-o,--out", o->out, "Scene file to write (.json); meshes are written beside it")->required();
-    sub->add_option("--triangles", o->triangles,
-                    "Requested triangle count, about (100 to 5,000,000; default 5000, for 'twist' the source mesh's)")
-        ->check(CLI::Range(size_t(100), size_t(5'000'000)));
-    sub->add_option("--seed", o->seed,
-                    "Random seed of 'cylinders' and 'sheets' (same seed, same bytes; the other kinds are not random)");
-    sub->add_option("--frames", o->frames, "Frames of animation (0: a still scene; at most 10,000)")
-        ->check(CLI::Range(size_t(0), size_t(10'000)));
-    sub->add_option(
-           "--count", o->count,
-           "Number of cylinders for 'cylinders' (default 100), of sheets for 'sheets' (default 8); 1 to 10,000")
-        ->check(CLI::Range(size_t(1), size_t(10'000)));
-    sub->add_option("--tilt", o->tilt,
-                    "'sheets': degrees by which the sheets are tilted from the xy plane, each by 0.5 to 1.5 times "
-                    "this (0 to 59; default 3)")
-        ->check(CLI::Range(0.0, 59.0));
+    addNumber(sub, "--triangles", o->triangles,
+              "Requested triangle count, about (100 to 5,000,000; default 5000, for 'twist' the source mesh's)",
+              size_t(100), size_t(5'000'000));
+    addNumber(sub, "--seed", o->seed,
+              "Random seed of 'cylinders' and 'sheets' (same seed, same bytes; the other kinds are not random)");
+    addNumber(sub, "--frames", o->frames, "Frames of animation (0: a still scene; at most 10,000)", size_t(0),
+              size_t(10'000));
+    addNumber(sub, "--count", o->count,
+              "Number of cylinders for 'cylinders' (default 100), of sheets for 'sheets' (default 8); 1 to 10,000",
+              size_t(1), size_t(10'000));
+    addNumber(sub, "--tilt", o->tilt,
+              "'sheets': degrees by which the sheets are tilted from the xy plane, each by 0.5 to 1.5 times "
+              "this (0 to 59; default 3)",
+              0.0, 59.0);
     sub->add_option("--mesh", o->mesh,
                     "Source mesh of 'bunny', 'cows', 'twist' (default: the bundled bunny, or the cow for 'cows')");
     sub->callback([o, sub, &action] {

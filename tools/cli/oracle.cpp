@@ -186,7 +186,7 @@ void addOracleCommand(CLI::App& app, Action& action) {
                                        "(grid or Embree broad phase, exact predicates), by class");
     sub->add_option("scene", o->scene, "Scene file (.json) or mesh")->required();
     sub->add_option("--json", o->json, "Write the pairs as [objectA, triA, objectB, triB, class] rows, sorted");
-    sub->add_option("--frame", o->frame, "Only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
+    addNumber(sub, "--frame", o->frame, "Only this frame (default: every frame)", 0L, std::numeric_limits<long>::max());
     addThreadsOption(sub, o->threads);
     sub->add_flag("--weld", o->weld, "Treat bit-identical vertices of an object as one vertex (soups)");
     sub->add_option("--broad-phase", o->broadPhase, "grid (ours, faster) | embree (Embree 3 rtcCollide); same pairs")

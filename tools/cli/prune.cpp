@@ -27,6 +27,12 @@
 namespace cullide::cli {
 namespace {
 
+// The smallest --max-viewport. Every tile draws the call's whole list again, every triangle set
+// up each time, so a call costs about as many whole draws as it has tiles: below 64 pixels a
+// 500x500 call has thousands and the bundled scenes take minutes. No GPU's limit is near it
+// (Vulkan guarantees 4096 pixels).
+constexpr int kMinMaxViewport = 64;
+
 struct PruneOptions {
     std::string scene;
     OptionText cullide;  // method, resolution, depth, directions, hierarchy (cullide/options.h)
@@ -273,12 +279,13 @@ void addPruneCommand(CLI::App& app, Action& action) {
         ->check(CLI::IsMember(raster::backendNames()))
         ->capture_default_str();
     addThreadsOption(sub, o->threads, "Worker threads of the whole run: hierarchies, view fits, the CPU backend");
-    sub->add_option("--max-viewport", o->maxViewport,
-                    "Draw as a backend whose largest viewport side is N pixels: calls larger than that in tiles, "
-                    "the same PCS (1.." +
-                        std::to_string(kMaxViewportSide) + "; docs/cullide.md#adaptive-resolution)")
-        ->check(CLI::Range(1, kMaxViewportSide));
-    sub->add_option("--frame", o->frame, "Prune only this frame (default: every frame)")->check(CLI::NonNegativeNumber);
+    addNumber(sub, "--max-viewport", o->maxViewport,
+              "Draw as a backend whose largest viewport side is N pixels: calls larger than that in tiles, "
+              "the same PCS (" +
+                  std::to_string(kMinMaxViewport) + ".." + std::to_string(kMaxViewportSide) +
+                  ": each tile draws every triangle again; docs/cullide.md#adaptive-resolution)",
+              kMinMaxViewport, kMaxViewportSide);
+    addNumber(sub, "--frame", o->frame, "Prune only this frame (default: every frame)", 0L, std::numeric_limits<long>::max());
     sub->add_option("--json", o->json, "Write the PCS ([object, triangle] pairs), per-pass stats and times as JSON");
     sub->add_option("--out", o->out, "Write the frame as PLY with PCS triangles coloured green");
     sub->add_option("--frames", o->frames,

@@ -185,14 +185,13 @@ void addStudyCommand(CLI::App& app, Action& action) {
                     "each frame alone, so coherent is its full list)");
     sub->add_option("--views", o->views, "View modes: fit | clustered (docs/cullide.md#views-per-cluster)");
     sub->add_option("--hierarchies", o->hierarchies, "connectivity | random");
-    sub->add_option("--leaf-sizes", o->leafSizes, "Hierarchy leaf sizes");
+    addNumbers(sub, "--leaf-sizes", o->leafSizes, "Hierarchy leaf sizes", 1u, kMaxLeafSize);
     sub->add_option("--exact-switches", o->exactSwitches,
                     "Switches to exact: never, auto or N (as prune --exact-switch); with the oracle, each run records "
                     "its time to exact pairs");
     sub->add_option("--backends", o->backends, "Backends: " + raster::backendNameList());
-    sub->add_option("--threads", o->threads, "Worker threads per run (0: all cores)");
-    sub->add_option("--repeats", o->repeats, "Timed runs per configuration (median, min, max)")
-        ->check(CLI::Range(1, 1000));
+    addNumbers(sub, "--threads", o->threads, "Worker threads per run (0: all cores)", 0, kMaxThreads);
+    addNumber(sub, "--repeats", o->repeats, "Timed runs per configuration (median, min, max)", 1, 1000);
     sub->add_flag("--no-oracle", o->noOracle, "Time only: no oracle, no false prunes");
     sub->add_option("--shard", o->shard,
                     "Run only slice i of N (i/N, 0-based; e.g. $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT)");
@@ -203,9 +202,9 @@ void addStudyCommand(CLI::App& app, Action& action) {
     addProgressOption(sub, o->progress);
     sub->add_option("--stability", o->stability,
                     "Run a stability sweep instead: penetration | tilt | overlap | jitter (CSV to --out)");
-    sub->add_option("--trials", o->trials, "Stability: trials per point")->check(CLI::Range(1, 100000));
-    sub->add_option("--resolution", o->resolution, "Stability: viewport side")->check(CLI::Range(1, kMaxViewportSide));
-    sub->add_option("--seed", o->seed, "Stability: random seed");
+    addNumber(sub, "--trials", o->trials, "Stability: trials per point", 1, 100000);
+    addNumber(sub, "--resolution", o->resolution, "Stability: viewport side", 1, kMaxViewportSide);
+    addNumber(sub, "--seed", o->seed, "Stability: random seed");
     sub->callback([o, sub, &action] {
         if (!sub->get_subcommands().empty()) return;
         refuseInapplicable(*o, *sub);

@@ -370,16 +370,14 @@ int runInfo(const InfoOptions& o) {
 }  // namespace
 
 void addTraceRuleOptions(CLI::App* sub, raster::TraceRules& rules) {
-    sub->add_option("--subpixel-bits", rules.subpixelBits, "The reference's subpixel bits")
-        ->check(CLI::Range(raster::kMinSubpixelBits, raster::kMaxSubpixelBits))
+    addNumber(sub, "--subpixel-bits", rules.subpixelBits, "The reference's subpixel bits", raster::kMinSubpixelBits,
+              raster::kMaxSubpixelBits)
         ->capture_default_str();
-    sub->add_option("--other-subpixel-bits", rules.otherSubpixelBits,
-                    "Subpixel bits the intervals allow the replaying implementation (GL requires >= 4)")
-        ->check(CLI::Range(1, 24))
+    addNumber(sub, "--other-subpixel-bits", rules.otherSubpixelBits,
+              "Subpixel bits the intervals allow the replaying implementation (GL requires >= 4)", 1, 24)
         ->capture_default_str();
-    sub->add_option("--depth-margin", rules.depthLsb,
-                    "Constant depth margin of the intervals, in LSB (unorm) or 2^-24 (float)")
-        ->check(CLI::Range(0.0, 1e6))
+    addNumber(sub, "--depth-margin", rules.depthLsb,
+              "Constant depth margin of the intervals, in LSB (unorm) or 2^-24 (float)", 0.0, 1e6)
         ->capture_default_str();
 }
 
@@ -395,8 +393,7 @@ void addTraceCommand(CLI::App& app, Action& action) {
     rec->add_option("-o,--out", r->out, "The trace file to write")->required();
     addCullideOptions(rec, r->cullide);
     addThreadsOption(rec, r->threads);
-    rec->add_option("--frame", r->frame, "Record only this frame (default: every frame)")
-        ->check(CLI::NonNegativeNumber);
+    addNumber(rec, "--frame", r->frame, "Record only this frame (default: every frame)", 0L, std::numeric_limits<long>::max());
     addTraceRuleOptions(rec, r->rules);
     addProgressOption(rec, r->progress);
     rec->callback([r, rec, &action] {
@@ -430,7 +427,7 @@ void addTraceCommand(CLI::App& app, Action& action) {
     cmp->add_option("results", c->results, "The results file (JSON: {\"backend\", \"results\"})")->required();
     cmp->add_option("--json", c->json, "Write the verdict as JSON");
     cmp->add_option("--png", c->png, "Write difference pictures of the worst queries' coverage into this folder");
-    cmp->add_option("--worst", c->worst, "How many worst queries to list")->capture_default_str();
+    addNumber(cmp, "--worst", c->worst, "How many worst queries to list")->capture_default_str();
     cmp->callback([c, &action] { action = [c] { return runCompare(*c); }; });
 
     auto i = std::make_shared<InfoOptions>();

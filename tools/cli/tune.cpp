@@ -13,6 +13,7 @@
 #include "commands.h"
 
 #include "cullide/error.h"
+#include "cullide/parse_number.h"
 #include "cullide/pipeline/progress.h"
 #include "cullide/study/study.h"
 
@@ -92,7 +93,7 @@ const std::vector<TuneAxis>& tuneAxes() {
          "16",
          [](study::Spec& s, const std::vector<std::string>& v) {
              s.leafSizes.clear();
-             for (const std::string& x : v) s.leafSizes.push_back(uint32_t(std::stoul(x)));
+             for (const std::string& x : v) s.leafSizes.push_back(parseNumber(x, "option --leaf-size", 1u, kMaxLeafSize));
          },
          [](const study::RunConfig& rc) { return std::to_string(rc.leafSize); }},
     };
@@ -332,16 +333,13 @@ void addTuneCommand(CLI::App& app, Action& action) {
         "that meets an accuracy target on a scene (docs/cullide.md#tune)");
     sub->add_option("scene", o->scene, "Scene file (FILE@K: frame K) or a study scene (bunny:N, cows:N, ...)")
         ->required();
-    sub->add_option("--max-false-prunes", o->maxFalsePrunes,
-                    "Accuracy target: false prunes (triangles, from the exact oracle) at most K")
-        ->check(CLI::Range(0L, 1'000'000'000L))
+    addNumber(sub, "--max-false-prunes", o->maxFalsePrunes,
+              "Accuracy target: false prunes (triangles, from the exact oracle) at most K", 0L, 1'000'000'000L)
         ->capture_default_str();
-    sub->add_option("--budget-ms", o->budgetMs, "Time budget: time to exact pairs at most T ms (default: none)")
-        ->check(CLI::Range(1e-6, 1e9));
+    addNumber(sub, "--budget-ms", o->budgetMs, "Time budget: time to exact pairs at most T ms (default: none)", 1e-6,
+              1e9);
     addThreadsOption(sub, o->threads);
-    sub->add_option("--repeats", o->repeats, "Timed runs per configuration (median)")
-        ->check(CLI::Range(1, 1000))
-        ->capture_default_str();
+    addNumber(sub, "--repeats", o->repeats, "Timed runs per configuration (median)", 1, 1000)->capture_default_str();
     sub->add_option("-o,--out", o->out,
                     "Keep the runs as a study output (.csv; .jsonl beside it); a second tune resumes from it");
     addProgressOption(sub, o->progress);

@@ -178,16 +178,14 @@ void addValidateCommand(CLI::App& app, Action& action) {
                     "The backend validated: gl (OpenGL 4.5 through headless EGL) | vulkan (Vulkan 1.1+, headless)")
         ->check(CLI::IsMember(raster::gpuBackendNames()))
         ->capture_default_str();
-    sub->add_option("--frame", o->frame, "Validate only this frame (default: every frame)")
-        ->check(CLI::NonNegativeNumber);
+    addNumber(sub, "--frame", o->frame, "Validate only this frame (default: every frame)", 0L, std::numeric_limits<long>::max());
     sub->add_option("--png", o->png, "Write difference pictures of the worst queries' coverage into this folder");
     sub->add_option("--json", o->json,
                     "Write the verdict (rates, per frame and depth format, worst queries, PCS) as JSON");
     sub->add_option("--trace", o->trace, "Keep the recorded trace in this file (replayable with `cullide trace`)");
-    sub->add_option("--worst", o->worst, "How many worst queries to list")->capture_default_str();
-    sub->add_option("--depth-margin", o->depthLsb,
-                    "Constant depth margin of the intervals, in LSB (unorm) or 2^-24 (float)")
-        ->check(CLI::Range(0.0, 1e6))
+    addNumber(sub, "--worst", o->worst, "How many worst queries to list")->capture_default_str();
+    addNumber(sub, "--depth-margin", o->depthLsb,
+              "Constant depth margin of the intervals, in LSB (unorm) or 2^-24 (float)", 0.0, 1e6)
         ->capture_default_str();
     addProgressOption(sub, o->progress);
     sub->callback([o, sub, &action] {

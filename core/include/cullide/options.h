@@ -5,6 +5,8 @@
 // Conventions
 //   - Values arrive as the user typed them: text for the method, viewport, depth format,
 //     directions, hierarchy kind and view mode; numbers for the hierarchy's sizes and seed.
+//   - Every number in a text is read by parseNumber (parse_number.h): no wrap, no clamp, no
+//     trailing characters, ranges checked after reading.
 //   - Every error is InputError(name, cause). `name` is what the user typed the value as
 //     (OptionNames: "option --depth" by default, "option --depths" or "spec.json: field 'depths'"
 //     in a study); `cause` is the same words for the same bad value whichever command it came
@@ -26,6 +28,8 @@ inline constexpr uint32_t kMaxLeafSize = 1'000'000;
 inline constexpr uint32_t kMinBranching = 2, kMaxBranching = 64;
 // Worker threads every command, the study and the Python module accept: 0 (all cores) to kMaxThreads.
 inline constexpr int kMaxThreads = 1024;
+// Spread directions a count N may ask for (parseDirections: 1..kMaxSpreadDirections).
+inline constexpr uint32_t kMaxSpreadDirections = 10'000;
 
 // CullideOptions as typed; the defaults give CullideOptions' defaults.
 struct OptionText {
@@ -70,7 +74,7 @@ struct ResolutionSetting {
     double autoCoverage = 0;
 };
 ResolutionSetting parseResolutionSetting(const std::string& text, const std::string& name = "option --resolution");
-// "axes", "N" (N spread directions, 1..10000), or a list "x,-y,z" / "1 0 0;0 1 1" of non-zero
+// "axes", "N" (N spread directions, 1..kMaxSpreadDirections), or a list "x,-y,z" / "1 0 0;0 1 1" of non-zero
 // directions (normalized): CullideOptions::directions. "pca" and "coherent" give the axes,
 // "coherent:LIST" the fixed list LIST (axes, N or a list; the order and set that coherent chooses
 // from).

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <functional>
 #include <type_traits>
 
 namespace cullide::raster::detail {
@@ -16,6 +17,45 @@ bool sameView(const OrthoView& a, const OrthoView& b) {
         a.ymin == b.ymin && a.ymax == b.ymax && a.znear == b.znear && a.zfar == b.zfar && a.width == b.width &&
         a.height == b.height && a.depth == b.depth && a.originX == b.originX && a.originY == b.originY &&
         a.gridWidth == b.gridWidth && a.gridHeight == b.gridHeight;
+}
+
+size_t viewHash(const OrthoView& v) {
+    size_t h = 0;
+    auto mix = [&h](uint64_t x) { h ^= std::hash<uint64_t>{}(x) + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2); };
+    // sameView compares doubles with ==, under which 0.0 and -0.0 are equal: both hash as 0.0.
+    auto real = [&mix](double x) { mix(std::bit_cast<uint64_t>(x == 0 ? 0.0 : x)); };
+    for (const Vec3d* axis : {&v.right, &v.up, &v.dir})
+        for (int k = 0; k < 3; ++k) real((*axis)[k]);
+    for (double x : {v.xmin, v.xmax, v.ymin, v.ymax, v.znear, v.zfar}) real(x);
+    for (int x : {v.width, v.height, v.originX, v.originY, v.gridWidth, v.gridHeight, v.depth.bits})
+        mix(uint64_t(uint32_t(x)));
+    mix(uint64_t(v.depth.kind));
+    return h;
+}
+
+const ViewFragments* ViewCache::find(const OrthoView& view) const {
+    const auto [first, last] = index_.equal_range(viewHash(view));
+    for (auto it = first; it != last; ++it)
+        if (sameView(views_[it->second].view, view)) return &views_[it->second];
+    return nullptr;
+}
+
+void ViewCache::add(ViewFragments&& v) {
+    if (!accepting()) return;
+    if (bytes_ + v.bytes() > budget_) {
+        full_ = true;
+        return;
+    }
+    bytes_ += v.bytes();
+    index_.emplace(viewHash(v.view), views_.size());
+    views_.push_back(std::move(v));
+}
+
+void ViewCache::clear() {
+    std::vector<ViewFragments>().swap(views_);
+    std::unordered_multimap<size_t, size_t>().swap(index_);
+    bytes_ = 0;
+    full_ = false;
 }
 
 bool replayable(const CommandList& list) {

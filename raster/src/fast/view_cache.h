@@ -26,6 +26,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 namespace cullide::raster::detail {
@@ -72,6 +73,32 @@ struct ViewFragments {
 
 // Whether the two views give the same window coordinates, viewport and depth codes.
 bool sameView(const OrthoView& a, const OrthoView& b);
+// A hash of what sameView compares: views that are the same hash alike.
+size_t viewHash(const OrthoView& v);
+
+// The captured views of one geometry within a byte budget, found by their view in constant time.
+// A call drawn in tiles sets a view per tile (a 500 x 500 call at 4 pixels per side: 15,625), and
+// each is captured, so a search through the views kept would cost every list time in proportion
+// to all the tiles before it.
+class ViewCache {
+public:
+    explicit ViewCache(size_t budgetBytes = 0) : budget_(budgetBytes) {}
+    // The fragments captured under a view that is the same as `view` (sameView), or null.
+    const ViewFragments* find(const OrthoView& view) const;
+    // Keeps `v` if it fits the budget; else keeps nothing more until clear() (the views of one
+    // geometry are alike in size).
+    void add(ViewFragments&& v);
+    // Whether a capture may still be kept: a budget, and not yet over it.
+    bool accepting() const { return budget_ > 0 && !full_; }
+    bool empty() const { return views_.empty(); }
+    void clear();
+
+private:
+    size_t budget_ = 0, bytes_ = 0;
+    bool full_ = false;
+    std::vector<ViewFragments> views_;
+    std::unordered_multimap<size_t, size_t> index_;  // viewHash -> place in views_
+};
 
 // Whether `list` may be replayed from a view's fragments: no conservative draws.
 bool replayable(const CommandList& list);

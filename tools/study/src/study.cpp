@@ -11,6 +11,7 @@
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
 #include "cullide/parallel.h"
+#include "cullide/parse_number.h"
 #include "cullide/provenance.h"
 #include "cullide/resources.h"
 #include "cullide/raster/backends.h"
@@ -57,11 +58,7 @@ std::vector<std::string> splitColon(const std::string& s) {
 }
 
 size_t parseCount(const std::string& text, const std::string& scene) {
-    char* end = nullptr;
-    const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
-    if (text.empty() || *end != 0 || v < 1 || v > 50'000'000)
-        throw InputError("scene '" + scene + "'", "'" + text + "' is not a count from 1 to 50,000,000");
-    return size_t(v);
+    return parseNumber(text, "scene '" + scene + "'", size_t(1), size_t(50'000'000));
 }
 
 bool isGenerated(const std::string& text) {
@@ -137,23 +134,43 @@ std::string RunConfig::id() const {
     return buf;
 }
 
+namespace {
+
+// A generated scene "kind:N" or "cylinders:N:C": its kind, request and cylinder count, every number
+// checked (expand() and studyFrameCount call it, so a bad one is refused before any run).
+struct Generated {
+    std::string kind;
+    SceneRequest request;
+    size_t cylinders = 8;
+};
+
+Generated parseGenerated(const std::string& text) {
+    const std::vector<std::string> parts = splitColon(text);
+    if (parts.size() < 2 || parts.size() > 3 || (parts.size() == 3 && parts[0] != "cylinders"))
+        throw InputError("scene '" + text + "'", "expected bunny:N, cows:N, twist:N or cylinders:N[:C]");
+    Generated g;
+    g.kind = parts[0];
+    g.request.triangles = parseCount(parts[1], text);
+    if (parts.size() == 3) g.cylinders = parseCount(parts[2], text);
+    return g;
+}
+
+}  // namespace
+
 size_t studyFrameCount(const std::string& text) {
-    if (isGenerated(text)) return 1;
+    if (isGenerated(text)) return (void)parseGenerated(text), size_t(1);
     return loadScene(splitFrame(text).first).frameCount();
 }
 
 Scene loadStudyScene(const std::string& text, uint32_t frame) {
     if (isGenerated(text)) {
-        const std::vector<std::string> parts = splitColon(text);
-        if (parts.size() < 2 || parts.size() > 3 || (parts.size() == 3 && parts[0] != "cylinders"))
-            throw InputError("scene '" + text + "'", "expected bunny:N, cows:N, twist:N or cylinders:N[:C]");
-        SceneRequest r;
-        r.triangles = parseCount(parts[1], text);
-        if (parts[0] == "bunny") return makeDeformedBunny(loadMesh(dataDir() + "/meshes/bunny.off"), r).scene;
-        if (parts[0] == "cows") return makeTwoCows(loadMesh(dataDir() + "/meshes/cow.off"), r).scene;
-        if (parts[0] == "twist")
+        const Generated g = parseGenerated(text);
+        const SceneRequest& r = g.request;
+        if (g.kind == "bunny") return makeDeformedBunny(loadMesh(dataDir() + "/meshes/bunny.off"), r).scene;
+        if (g.kind == "cows") return makeTwoCows(loadMesh(dataDir() + "/meshes/cow.off"), r).scene;
+        if (g.kind == "twist")
             return makeTwistAnimation(resample(loadMesh(dataDir() + "/meshes/bunny.off"), r.triangles), r).scene;
-        return makeCylinders(parts.size() == 3 ? parseCount(parts[2], text) : 8, r).scene;
+        return makeCylinders(g.cylinders, r).scene;
     }
     const Animation a = loadScene(splitFrame(text).first);
     if (frame >= a.frameCount())
@@ -167,7 +184,7 @@ namespace {
 // The frames a scene string selects: a generated scene's one frame, or a file's "file:K", "file:all"
 // or every frame.
 std::vector<uint32_t> framesOf(const std::string& scene) {
-    if (isGenerated(scene)) return {0};
+    if (isGenerated(scene)) return (void)parseGenerated(scene), std::vector<uint32_t>{0};
     const auto [file, sel] = splitFrame(scene);
     const size_t count = studyFrameCount(scene);
     std::vector<uint32_t> frames;
@@ -175,10 +192,8 @@ std::vector<uint32_t> framesOf(const std::string& scene) {
         for (uint32_t f = 0; f < count; ++f) frames.push_back(f);
         return frames;
     }
-    if (sel.find_first_not_of("0123456789") != std::string::npos || sel.size() > 9 || std::stoul(sel) >= count)
-        throw InputError("scene '" + scene + "'",
-                         "frame '" + sel + "': the file has " + std::to_string(count) + " frame(s)");
-    return {uint32_t(std::stoul(sel))};
+    if (count == 0) throw InputError("scene '" + scene + "'", "frame '" + sel + "': the file has no frames");
+    return {parseNumber(sel, "scene '" + scene + "': frame", uint32_t(0), uint32_t(count - 1))};
 }
 
 // Every combination of the spec's lists for one frame of one scene, appended in the order of the
@@ -230,13 +245,12 @@ std::vector<RunConfig> expand(const Spec& spec) {
 }
 
 Shard parseShard(const std::string& text) {
-    Shard s;
-    unsigned long long i = 0, n = 0;
-    char slash = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%llu%c%llu%c", &i, &slash, &n, &extra) != 3 || slash != '/' || n < 1 || i >= n ||
-        n > 1'000'000)
+    const size_t slash = text.find('/');
+    if (slash == std::string::npos)
         throw InputError("option --shard", "'" + text + "': expected i/N with 0 <= i < N (e.g. 0/4)");
-    s.index = size_t(i), s.count = size_t(n);
+    Shard s;
+    s.count = parseNumber(std::string_view(text).substr(slash + 1), "option --shard: N", size_t(1), size_t(1'000'000));
+    s.index = parseNumber(std::string_view(text).substr(0, slash), "option --shard: i", size_t(0), s.count - 1);
     return s;
 }
 
