@@ -1,6 +1,7 @@
 // Generators: subdivision, decimation, resampling and the paper's scenes (deformed bunny, two
 // cows, cylinders, twist). The intersection properties are checked with a small double-precision
 // triangle-triangle test below (test-only: it is a good-enough check, not the exact oracle).
+#include "cullide/error.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
 
@@ -13,6 +14,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <numeric>
 #include <set>
@@ -588,4 +590,40 @@ TEST(GeneratorsSheets, NearlyParallelSomeCross) {
     EXPECT_EQ(bits(a), bits(makeSheets(8, 3.0, q)));
     q.seed = 2;
     EXPECT_NE(bits(a), bits(makeSheets(8, 3.0, q)));
+}
+
+// ---- source meshes ---------------------------------------------------------------------------
+
+// Trap: a source mesh with no extent to take fractions of (all vertices one point; for the bunny a
+// mesh without height, or a line) divides by zero and writes NaN positions; it must be refused
+// naming the mesh, by every generator made from a mesh.
+TEST(GeneratorsSourceMesh, ZeroExtentIsRefusedNamingTheMesh) {
+    auto meshOf = [](std::vector<Vec3f> positions) {
+        Mesh m;
+        m.positions = std::move(positions);
+        m.triangles = {{0, 1, 2}};
+        return m;
+    };
+    const Mesh point = meshOf({{1, 1, 1}, {1, 1, 1}, {1, 1, 1}});
+    const Mesh flatInY = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 0, 1}});
+    const Mesh upright = meshOf({{0, 0, 0}, {0, 1, 0}, {0, 2, 0}});
+    auto refused = [](const std::function<void()>& make, const std::string& cause) {
+        try {
+            make();
+            ADD_FAILURE() << "accepted: " << cause;
+        } catch (const InputError& e) {
+            EXPECT_EQ(std::string(e.what()).rfind("m.off: ", 0), 0u) << e.what();
+            EXPECT_NE(std::string(e.what()).find(cause), std::string::npos) << e.what();
+        }
+    };
+    const SceneRequest q = request(100, 2);
+    refused([&] { makeDeformedBunny(point, q, "m.off"); }, "zero extent (all its vertices are one point)");
+    refused([&] { makeTwoCows(point, q, "m.off"); }, "zero extent");
+    refused([&] { makeTwistAnimation(point, q, "m.off"); }, "zero extent");
+    refused([&] { makeDeformedBunny(flatInY, q, "m.off"); }, "zero extent along y");
+    refused([&] { makeDeformedBunny(upright, q, "m.off"); }, "zero extent along x and z");
+    refused([&] { makeTwoCows(meshOf({{-3e38f, 0, 0}, {3e38f, 0, 0}, {0, 1, 0}}), q, "m.off"); }, "overflows float");
+    // A flat mesh still twists (about its longest axis) and still makes two cows.
+    EXPECT_NO_THROW(makeTwistAnimation(flatInY, q, "m.off"));
+    EXPECT_NO_THROW(makeTwoCows(flatInY, q, "m.off"));
 }

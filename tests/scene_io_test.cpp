@@ -1,12 +1,15 @@
 // Tests for scene_io: the JSON scene format (docs/scene-format.md), its errors, and writeScene.
+#include "cullide/cullide.h"
 #include "cullide/error.h"
 #include "cullide/mesh_io.h"
+#include "cullide/raster/cpu_backend.h"
 #include "cullide/scene_io.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 namespace cullide {
@@ -63,7 +66,9 @@ struct BadScene {
 
 // Trap: errors that do not name the scene file, that point nowhere (malformed JSON without line
 // and column), or input accepted silently (unknown keys, duplicate keys that nlohmann would
-// collapse, duplicate names, frames naming unknown objects, wrong position counts).
+// collapse, duplicate names, frames naming unknown objects, wrong position counts, transforms of
+// finite numbers whose world coordinates overflow float or pass the oracle's 2^60, in the base
+// scene or in one frame).
 class SceneIoBad : public ::testing::TestWithParam<BadScene> {};
 
 TEST_P(SceneIoBad, ThrowsInputErrorNamingSceneAndCause) {
@@ -92,12 +97,68 @@ INSTANTIATE_TEST_SUITE_P(
                                "has 8 vertices, but object 'a' has 7 (wrong position count)"},
                       BadScene{"bad/missing_mesh.json", "no_such_mesh.off: cannot open: no such file"},
                       BadScene{"bad/nonfinite_transform.json", "is not a finite float"},
+                      BadScene{"bad/overflow_transform.json", "object 'cow': world coordinates overflow"},
+                      BadScene{"bad/overflow_frame.json", "frame 3, object 'cow': world coordinates overflow"},
+                      BadScene{"bad/beyond_2_60.json", "lies beyond 2^60 in magnitude"},
                       BadScene{"bad/does_not_exist.json", "no such file"},
                       BadScene{"bad/unknown_extension.xyz", "unknown scene format"},
                       BadScene{"bad/nan.off", "non-finite"}),
     // Stable, readable names (the default prints the pointers, which change with ASLR and make
     // CTest's discovered names miss the tests).
     [](const auto& param) { return cullide::test::paramName(param.param.file); });
+
+// Trap: a scene built in code (the C++ API, no file) whose transform overflows float: its Inf world
+// coordinates must be refused, naming the object, wherever world geometry is made (worldMesh,
+// flatten, a prune), not reach a backend as "the view box has a non-finite bound".
+TEST(SceneIo, WorldCoordinatesAreCheckedWhereTheyAreMade) {
+    Transform huge = Transform::Identity();
+    huge.matrix().topLeftCorner<3, 3>() *= 1e38f;
+    huge.translation() = Vec3f(3e38f, 0, 0);
+    const Scene s = test::sceneOf(
+        {{test::box({0, 0, 0}, {1, 1, 1}), Transform::Identity()}, {test::box({0, 0, 0}, {1, 1, 1}), huge}});
+    auto refused = [](const std::function<void()>& f, const std::string& words) {
+        try {
+            f();
+            ADD_FAILURE() << "accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+        }
+    };
+    refused([&] { (void)s.worldMesh(1); }, "scene: object 'o1': world coordinates overflow");
+    refused([&] { (void)flatten(s); }, "object 'o1': world coordinates overflow");
+    refused([&] { (void)runCullide(s, *raster::makeCpuBackend(), CullideOptions{}); }, "object 'o1'");
+    Animation a;
+    a.scene = s;
+    refused([&] { validateAnimation(a, "s.json"); }, "s.json: object 'o1': world coordinates overflow");
+    a.scene.objects[1].transform = Transform::Identity();
+    a.frames.resize(2);
+    a.frames[1].poses.resize(2);
+    a.frames[1].poses[0].transform = huge;
+    refused([&] { validateAnimation(a, "s.json"); }, "s.json: frame 1, object 'o0': world coordinates overflow");
+    EXPECT_NO_THROW(s.worldMesh(0));
+}
+
+// Trap: names that frames and results cannot tell apart (empty, or an earlier object's), or a
+// scene without objects, accepted from code although a scene file refuses them (one check in core).
+TEST(SceneIo, ObjectNamesAreKeys) {
+    Scene s = test::sceneOf({{test::box({0, 0, 0}, {1, 1, 1}), Transform::Identity()},
+                             {test::box({0, 0, 0}, {1, 1, 1}), Transform::Identity()}});
+    EXPECT_NO_THROW(checkSceneObjects(s, "x"));
+    s.objects[1].name = "o0";
+    EXPECT_THROW(checkSceneObjects(s, "x"), InputError);
+    Animation a;
+    a.scene = s;
+    TempDir d;
+    EXPECT_THROW(writeScene(a, d / "s.json"), InputError);
+    s.objects[1].name = "";
+    EXPECT_THROW(checkSceneObjects(s, "x"), InputError);
+    try {
+        checkSceneObjects(Scene{}, "x");
+        ADD_FAILURE() << "an empty scene";
+    } catch (const InputError& e) {
+        EXPECT_STREQ(e.what(), "x: the scene has no objects; it needs at least one");
+    }
+}
 
 // Trap: writeScene output that does not load back to the same animation (bit for bit: meshes,
 // transforms, per-frame positions), or whose bytes differ between two writes.

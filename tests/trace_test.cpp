@@ -354,6 +354,94 @@ TEST(Trace, HandEditedTracesAreRefusedWithTheProblemNamed) {
     EXPECT_TRUE(has(edited(word(cmd + 16 * firstBegin, 4)), "without"));  // begin -> end: unbalanced
 }
 
+// Trap: a header whose counts are taken on trust: a trace whose frames were emptied (then every
+// one of its zero queries "lies in its interval"), or whose summary or lists were edited, read
+// as valid. Each count that disagrees is named, and a trace without frames is refused.
+TEST(Trace, SummaryCountsAreCheckedAgainstTheData) {
+    TempDir dir;
+    recordSmall(dir / "t.trace");
+    const Parts good = split(slurp(dir / "t.trace"));
+    auto edited = [&](const std::function<void(Parts&)>& edit) {
+        Parts p = good;
+        edit(p);
+        return readError(dir, join(p));
+    };
+    auto has = [](const std::string& what, const std::string& words) {
+        return what.find(words) != std::string::npos ? ::testing::AssertionSuccess()
+                                                     : ::testing::AssertionFailure() << what;
+    };
+    EXPECT_TRUE(
+        has(edited([](Parts& p) { p.header["frames"] = Json::array(); }), "summary.frames is 3, but the trace has 0"));
+    EXPECT_TRUE(has(edited([](Parts& p) {
+                        p.header["frames"] = Json::array();
+                        for (auto& [key, count] : p.header["summary"].items()) count = 0;
+                    }),
+                    "frames is empty"));
+    EXPECT_TRUE(has(edited([](Parts& p) { p.header["frames"][1]["lists"].erase(0); }), "summary.lists is"));
+    for (const char* key : {"frames", "lists", "commands", "queries", "triangles_drawn"}) {
+        EXPECT_TRUE(
+            has(edited([&](Parts& p) { p.header["summary"][key] = p.header["summary"][key].get<uint64_t>() + 1; }),
+                std::string("summary.") + key + " is "));
+        EXPECT_TRUE(has(edited([&](Parts& p) { p.header["summary"].erase(key); }), key));
+    }
+    EXPECT_TRUE(has(edited([](Parts& p) { p.header.erase("summary"); }), "has no \"summary\""));
+
+    // The command line refuses it before replaying or comparing anything.
+    spit(dir / "emptied.trace", join([&] {
+             Parts p = good;
+             p.header["frames"] = Json::array();
+             return p;
+         }()));
+    const test::CommandRun r =
+        test::runCommand(std::string("'") + CULLIDE_CLI_PATH + "' trace replay '" + (dir / "emptied.trace").string() +
+                         "' -o '" + (dir / "r.json").string() + "' 2>&1");
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find((dir / "emptied.trace").string() + ": summary.frames is 3"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "r.json"));
+}
+
+// Trap: a recording that dies leaving its scratch or a half-written trace beside the output (a
+// kill cannot run a destructor): while recording, and after a finish that fails, the folder holds
+// nothing the writer made.
+TEST(Trace, WriterLeavesNothingBehindWhileWritingOrOnFailure) {
+    TempDir dir;
+    auto entries = [&] {
+        std::vector<std::string> names;
+        for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+            names.push_back(e.path().filename().string());
+        return names;
+    };
+    const Animation a = smallAnimation();
+    {
+        auto cpu = raster::makeCpuBackend();
+        raster::TraceWriter writer(dir / "t.trace", {}, {}, {});
+        raster::TraceRecorder recorder(*cpu, writer, {});
+        recorder.setFrame(0);
+        runCullide(a.scene, recorder, smallOptions());
+        recorder.endFrame();
+        EXPECT_EQ(entries(), std::vector<std::string>{}) << "the scratch file has a name while recording";
+    }
+    EXPECT_EQ(entries(), std::vector<std::string>{});
+    // The destination is a folder: finish fails naming it, and leaves only that folder.
+    std::filesystem::create_directory(dir / "t.trace");
+    {
+        auto cpu = raster::makeCpuBackend();
+        raster::TraceWriter writer(dir / "t.trace", {}, {}, {});
+        raster::TraceRecorder recorder(*cpu, writer, {});
+        runCullide(a.scene, recorder, smallOptions());
+        try {
+            recorder.finish();
+            ADD_FAILURE() << "finished into a folder";
+        } catch (const InputError& e) {
+            EXPECT_EQ(e.source(), (dir / "t.trace").string()) << e.what();
+        }
+    }
+    EXPECT_EQ(entries(), std::vector<std::string>{"t.trace"});
+    EXPECT_TRUE(std::filesystem::is_directory(dir / "t.trace"));
+    // A missing folder: named, nothing created.
+    EXPECT_THROW(raster::TraceWriter(dir / "no" / "t.trace", {}, {}, {}), InputError);
+}
+
 // Trap: a crash, a hang or an exception other than InputError on arbitrary damage (the fuzz
 // harness's idea, tests/fuzz/trace_fuzz.cpp, as a fixed-seed slice in every run).
 TEST(Trace, MutatedTracesLoadOrThrowInputErrorNeverCrash) {

@@ -11,6 +11,8 @@
 #include <cctype>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <utility>
 
 namespace cullide {
 
@@ -105,8 +107,14 @@ void OrthoView::validate() const {
     const bool ortho = std::abs(right.dot(up)) < tol && std::abs(right.dot(dir)) < tol && std::abs(up.dot(dir)) < tol;
     if (!unit || !ortho) throw InputError("view", "the view frame (right, up, dir) is not orthonormal");
     if (right.cross(up).dot(dir) < 0) throw InputError("view", "the view frame (right, up, dir) is left-handed");
-    for (double d : {xmin, xmax, ymin, ymax, znear, zfar})
-        if (!std::isfinite(d)) throw InputError("view", "the view box has a non-finite bound");
+    // Views fitted to a scene's geometry are finite (world coordinates are checked where a scene is
+    // made, scene.h); a box that is not comes from a caller that set it.
+    const std::pair<const char*, double> bounds[] = {{"xmin", xmin}, {"xmax", xmax},   {"ymin", ymin},
+                                                     {"ymax", ymax}, {"znear", znear}, {"zfar", zfar}};
+    for (const auto& [name, d] : bounds)
+        if (!std::isfinite(d))
+            throw InputError(
+                "view", std::string("the view box's ") + name + " is " + std::to_string(d) + ", not a finite number");
     if (!(xmin < xmax) || !(ymin < ymax) || !(znear < zfar))
         throw InputError("view", "the view box is empty (need xmin < xmax, ymin < ymax, znear < zfar)");
     if (!std::isfinite(xmax - xmin) || !std::isfinite(ymax - ymin) || !std::isfinite(zfar - znear))

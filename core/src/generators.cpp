@@ -104,6 +104,20 @@ Animation deformingObject(const std::string& name, const std::vector<Triangle>& 
     return a;
 }
 
+// The referenced bounds of a source mesh, by whose fractions a generator places its deformation;
+// throws InputError(source, ...) when no fractions can be taken of them: no triangles, an extent
+// that overflows float, or none at all (every referenced vertex one point), where the placement
+// would divide by zero and write NaN.
+Bounds sourceBounds(const Mesh& mesh, const std::string& source) {
+    if (mesh.triangles.empty()) throw InputError(source, "no triangles; a generated scene needs a surface");
+    const Bounds box = referencedBounds(mesh);
+    const Vec3f ext = box.extent();
+    if (!ext.allFinite()) throw InputError(source, "its extent overflows float; cannot be scaled");
+    if (ext == Vec3f::Zero())
+        throw InputError(source, "zero extent (all its vertices are one point); cannot be scaled");
+    return box;
+}
+
 // Keeps referenced vertices only, in their original order; remaps the triangles.
 Mesh compact(const std::vector<Vec3f>& positions, const std::vector<unsigned int>& indices) {
     std::vector<uint32_t> remap(positions.size(), UINT32_MAX);
@@ -271,9 +285,14 @@ Vec3f bendEar(const EarBend& b, const Vec3f& p, double amount) {
 
 }  // namespace
 
-Animation makeDeformedBunny(const Mesh& bunny, const SceneRequest& request) {
-    CULLIDE_CHECK(!bunny.triangles.empty(), "makeDeformedBunny: empty mesh");
-    const EarBend bend = earBendFor(referencedBounds(bunny));
+Animation makeDeformedBunny(const Mesh& bunny, const SceneRequest& request, const std::string& source) {
+    const Bounds box = sourceBounds(bunny, source);
+    // The bend's size is a fraction of the height, its plane spans the height and the width.
+    if (box.extent().y() == 0)
+        throw InputError(source, "zero extent along y (its height); the ear bend cannot be scaled to it");
+    if (box.extent().x() == 0 && box.extent().z() == 0)
+        throw InputError(source, "zero extent along x and z (its width); the ear bend cannot be scaled to it");
+    const EarBend bend = earBendFor(box);
     const Mesh rest = resample(bunny, request.triangles);
 
     auto deformed = [&](double amount) {
@@ -290,8 +309,8 @@ Animation makeDeformedBunny(const Mesh& bunny, const SceneRequest& request) {
 // The second cow is turned 35 degrees about y and shifted by a fraction of the cow's box, so the
 // bodies, heads and legs cross in many places. Frames move it along x from fully left of the first
 // to fully right of it, clear of it at both ends; the still scene is the middle position.
-Animation makeTwoCows(const Mesh& cow, const SceneRequest& request) {
-    CULLIDE_CHECK(!cow.triangles.empty(), "makeTwoCows: empty mesh");
+Animation makeTwoCows(const Mesh& cow, const SceneRequest& request, const std::string& source) {
+    (void)sourceBounds(cow, source);
     const Mesh one = resample(cow, std::max<size_t>(1, request.triangles / 2));
     const Bounds box = referencedBounds(one);
     const Vec3d ext = toD(box.extent());
@@ -475,9 +494,8 @@ Animation makeSheets(size_t count, double tiltDegrees, const SceneRequest& reque
 // About the longest axis of the referenced bounding box, through the box centre; the angle grows
 // linearly along that axis from -total/2 at one end to +total/2 at the other, and total grows from
 // 0 (frame 0: the mesh unchanged, bit for bit) to 90 degrees (last frame, and the still scene).
-Animation makeTwistAnimation(const Mesh& base, const SceneRequest& request) {
-    CULLIDE_CHECK(!base.triangles.empty(), "makeTwistAnimation: empty mesh");
-    const Bounds box = referencedBounds(base);
+Animation makeTwistAnimation(const Mesh& base, const SceneRequest& request, const std::string& source) {
+    const Bounds box = sourceBounds(base, source);
     const Vec3d ext = toD(box.extent());
     int ax = 0;
     if (ext.y() > ext[ax]) ax = 1;

@@ -47,8 +47,8 @@ public:
             allowKeys(o, where, {"name", "mesh", "transform"});
             Object obj;
             obj.name = requireString(requireKey(o, "name", where), where + ".name");
-            if (obj.name.empty()) fail(where + ".name is empty");
-            if (!byName.emplace(obj.name, i).second) fail(where + ": duplicate object name '" + obj.name + "'");
+            checkObjectName(obj.name, byName.contains(obj.name), src_, where);
+            byName.emplace(obj.name, i);
             const std::string meshRef = requireString(requireKey(o, "mesh", where), where + ".mesh");
             obj.mesh = loadReferencedMesh(meshRef, "object '" + obj.name + "'");
             if (o.contains("transform")) obj.transform = parseTransform(o["transform"], where + ".transform");
@@ -239,7 +239,10 @@ private:
                     fail(pw + ".positions: '" + ref + "' has " + std::to_string(m.positions.size()) +
                          " vertices, but object '" + name + "' has " + std::to_string(expected) +
                          " (wrong position count)");
-                checkPosePositions(m.positions, scene.objects[it->second], src_, where);
+                const Object& object = scene.objects[it->second];
+                checkPosePositions(m.positions, object, src_, where);
+                checkWorldPositions(m.positions, p.transform ? *p.transform : object.transform, name, src_,
+                                    "frame " + std::to_string(f));
                 // Checked now, read again by sceneAt when the frame is used (ObjectPose).
                 p.positionsFile = referencedPath(ref).string();
             }
@@ -326,12 +329,7 @@ Animation loadScene(const fs::path& path) {
 }
 
 void writeScene(const Animation& animation, const fs::path& path) {
-    validateAnimation(animation, path.string());
-    std::set<std::string> names;
-    for (const Object& o : animation.scene.objects)
-        if (o.name.empty() || !names.insert(o.name).second)
-            throw InputError(path.string(),
-                             "cannot write a scene whose object names are empty or not unique ('" + o.name + "')");
+    validateAnimation(animation, path.string());  // names too: frames refer to objects by name
     const fs::path dir = path.parent_path();
     const std::string stem = path.stem().string();
     OrderedJson root;

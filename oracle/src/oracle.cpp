@@ -34,8 +34,8 @@ double since(Clock::time_point t0) {
 }
 
 // Coordinates beyond this are refused: Embree drops boxes beyond ~1.8e18, and the float filter's
-// products stay far from overflow.
-constexpr double kMaxCoordinate = 0x1p60;
+// products stay far from overflow. Core's scenes are held to the same limit (scene.h).
+constexpr double kMaxCoordinate = kMaxWorldCoordinate;
 
 using detail::Prim;  // what the narrow phase reads of one primitive (narrow_phase.h)
 

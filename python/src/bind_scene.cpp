@@ -24,15 +24,19 @@ void bindScene(py::module_& m) {
         "Loads a mesh (.off, .obj, .ply, .stl) as (V float32 (n,3), F uint32 (m,3)); ValueError on a bad file.");
 
     py::class_<PyScene>(m, "Scene", "A scene: named objects (mesh and 4x4 transform), optionally animated frames.")
-        .def(py::init<>(), "An empty scene.")
+        .def(py::init<>(), "An empty scene (prune, oracle and world_mesh need at least one object: add them).")
         .def(
             "add",
             [](PyScene& s, const std::string& name, const py::object& v, const py::object& f,
                const py::object& transform) {
+                // The names a scene file may have (frames and results name objects by them).
+                checkObjectName(name, s.names.contains(name), "argument name", "");
                 Object o;
                 o.name = name;
                 o.mesh = meshFromPython(v, f, "object '" + name + "'");
                 o.transform = transformFromPython(transform, "object '" + name + "': transform");
+                checkWorldPositions(o.mesh.positions, o.transform, name, "Scene.add", "");
+                s.names.insert(name);
                 s.animation.scene.objects.push_back(std::move(o));
                 // An animated scene: the new object keeps its mesh and transform in every frame.
                 for (Frame& fr : s.animation.frames)
@@ -42,7 +46,9 @@ void bindScene(py::module_& m) {
             py::arg("name"), py::arg("vertices"), py::arg("faces") = py::none(), py::arg("transform") = py::none(),
             "Adds an object: vertices (n,3) real and faces (m,3) integer arrays, or one object with .vertices "
             "and .faces (a trimesh mesh) as `vertices`; transform: a 4x4 affine matrix (default identity). "
-            "Vertices are stored as float32. Returns the object's index. ValueError on bad arrays.")
+            "Vertices are stored as float32. Returns the object's index. ValueError on bad arrays, an empty "
+            "name or one the scene has, or world coordinates (transform times vertices, in float32) that are "
+            "not finite or beyond 2^60.")
         .def_property_readonly(
             "object_count", [](const PyScene& s) { return s.animation.scene.objects.size(); }, "Number of objects.")
         .def_property_readonly(
@@ -80,6 +86,7 @@ void bindScene(py::module_& m) {
             s.source = path;
             py::gil_scoped_release release;
             s.animation = loadScene(path);
+            for (const Object& o : s.animation.scene.objects) s.names.insert(o.name);
             return s;
         },
         py::arg("path"),

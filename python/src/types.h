@@ -13,6 +13,7 @@
 
 #include <memory>
 #include <string>
+#include <unordered_set>
 
 namespace cullide::python {
 
@@ -20,8 +21,12 @@ namespace cullide::python {
 struct PyScene {
     Animation animation;
     std::string source = "scene";
+    std::unordered_set<std::string> names;  // the objects' names, each taken once (checkObjectName)
 
+    // The scene at `frame`; ValueError for a frame it does not have, or a scene that cannot be
+    // used (no objects: checkSceneObjects).
     Scene at(long frame) const {
+        checkSceneObjects(animation.scene, source);
         if (frame < 0 || size_t(frame) >= animation.frameCount())
             fail("frame: " + std::to_string(frame) + " is outside 0.." + std::to_string(animation.frameCount() - 1) +
                  " (the scene has " + std::to_string(animation.frameCount()) + " frame(s))");

@@ -124,6 +124,30 @@ def test_bad_transform_and_object():
         cullide.Scene().add("m", v)
 
 
+# Trap: a Scene no scene file could be: an empty Scene pruned to an empty result, an empty or
+# duplicate name accepted (frames and results name objects), a transform whose world coordinates
+# overflow float (Inf reaching the backend) -- all ValueError naming the cause, the scene unchanged.
+def test_bad_scenes_raise_value_error():
+    v, f = box()
+    s = cullide.Scene()
+    with pytest.raises(ValueError, match="the scene has no objects"):
+        cullide.prune(s)
+    with pytest.raises(ValueError, match="the scene has no objects"):
+        cullide.oracle(s)
+    s.add("a", v, f)
+    with pytest.raises(ValueError, match="argument name: duplicate object name 'a'"):
+        s.add("a", v, f)
+    with pytest.raises(ValueError, match="argument name: an object's name is empty"):
+        s.add("", v, f)
+    t = np.eye(4) * 1e38
+    t[3, 3], t[0, 3] = 1, 3e38
+    with pytest.raises(ValueError, match="object 'big': world coordinates overflow"):
+        s.add("big", v, f, transform=t)
+    assert s.names == ["a"]
+    with pytest.raises(ValueError, match="duplicate object name 'bunny'"):
+        cullide.load_scene(SCENE).add("bunny", v, f)
+
+
 # Trap: the Python PCS must equal `cullide prune cow.off --json`'s, bit for bit (same parser, backend, frame).
 def test_prune_equals_command_line(tmp_path):
     r = cullide.prune(cullide.load_scene(COW))

@@ -179,6 +179,16 @@ def main():
         ("missing_mesh.json", '{"objects": [{"name": "a", "mesh": "no_such_mesh.off"}]}\n'),
         ("nonfinite_transform.json",
          '{"objects": [{"name": "a", "mesh": "../good/polys.off", "transform": {"translate": [0, 1e39, 0]}}]}\n'),
+        # Each number a finite float, but the world coordinates they make are not.
+        ("overflow_transform.json",
+         '{"objects": [{"name": "cow", "mesh": "../good/polys.off",\n'
+         '              "transform": {"scale": 1e38, "translate": [3e38, 0, 0]}}]}\n'),
+        ("overflow_frame.json",
+         '{"objects": [{"name": "a", "mesh": "../good/polys.off"}, {"name": "cow", "mesh": "../good/polys.off"}],\n'
+         ' "animation": {"frames": [{}, {}, {}, {"objects": {"cow": {"transform": {"scale": 1e38, '
+         '"translate": [0, 3e38, 0]}}}}]}}\n'),
+        ("beyond_2_60.json",
+         '{"objects": [{"name": "a", "mesh": "../good/polys.off", "transform": {"scale": 1e19}}]}\n'),
     ]
     for name, data in bad:
         write(os.path.join(BAD, name), data)

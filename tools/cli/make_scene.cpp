@@ -52,12 +52,12 @@ int runMakeScene(const MakeSceneOptions& o) {
         const std::string source = o.mesh.empty() ? defaultMesh(o.kind) : o.mesh;
         const Mesh mesh = loadMesh(source);
         switch (o.kind) {
-            case Kind::Bunny: animation = makeDeformedBunny(mesh, request); break;
-            case Kind::Cows: animation = makeTwoCows(mesh, request); break;
+            case Kind::Bunny: animation = makeDeformedBunny(mesh, request, source); break;
+            case Kind::Cows: animation = makeTwoCows(mesh, request, source); break;
             case Kind::Twist:
                 // As the study's twist:N: the mesh resampled to the request, then twisted; without
                 // --triangles the source mesh as it is.
-                animation = makeTwistAnimation(o.resampleTwist ? resample(mesh, o.triangles) : mesh, request);
+                animation = makeTwistAnimation(o.resampleTwist ? resample(mesh, o.triangles) : mesh, request, source);
                 break;
             case Kind::Cylinders:
             case Kind::Sheets: break;

@@ -245,10 +245,13 @@ def main():
             viewports.add(tuple(view["viewport"]))
         counts = {"frames": len(header["frames"]), "lists": len(results), "commands": ncmd,
                   "queries": int(kinds.sum()), "triangles_drawn": draws}
-        summary = header.get("summary", {})
+        summary = header.get("summary")
         require(isinstance(summary, dict), "summary is not an object")
         for key, value in counts.items():
-            require(key not in summary or summary[key] == value, f"summary {key} is {summary.get(key)}, the trace has {value}")
+            require(is_int(summary.get(key)) and summary[key] >= 0, f"summary.{key} is {summary.get(key)!r}, not a count")
+            require(summary[key] == value,
+                    f"summary.{key} is {summary[key]}, but the trace has {value} (the header disagrees with its data)")
+        require(counts["frames"] > 0, "frames is empty: a trace records at least one frame")
     except TraceError as e:
         print(f"{args.trace}: {e}", file=sys.stderr)
         return 2

@@ -14,11 +14,16 @@
 //     bunny and the twist is the undeformed mesh, bit for bit.
 //   - Triangle counts are "about": resampling lands within ~1% of the request, cylinders within
 //     a few percent (whole rings and sides).
+//   - The generators made from a mesh place their deformation by fractions of its bounding box:
+//     they throw InputError(source, ...) (`source` names the mesh) when the mesh has no triangles,
+//     or a box whose extent is zero (all vertices one point; for the bunny, also no height, or no
+//     width) or overflows float, where the fractions would divide by zero.
 #pragma once
 
 #include "cullide/scene.h"
 
 #include <cstdint>
+#include <string>
 
 namespace cullide {
 
@@ -53,12 +58,12 @@ struct SceneRequest {
 // expects the bundled bunny's frame (data/meshes/bunny.off: Y up, facing -x); on other meshes it
 // is still a smooth deformation but need not make an intersection. Frames bend the ear from 0
 // (frame 0: the resampled bunny unchanged) to the full bend (last frame).
-Animation makeDeformedBunny(const Mesh& bunny, const SceneRequest& request);
+Animation makeDeformedBunny(const Mesh& bunny, const SceneRequest& request, const std::string& source = "mesh");
 // Two cows merged into one object ("two_cows") so that many self-intersections exist: each copy
 // resampled to request.triangles / 2 (the first copy's vertices and triangles come first), the
 // second turned 35 degrees about y and shifted so that bodies, heads and legs cross. Frames move
 // the second copy along x from clear of the first on one side to clear on the other.
-Animation makeTwoCows(const Mesh& cow, const SceneRequest& request);
+Animation makeTwoCows(const Mesh& cow, const SceneRequest& request, const std::string& source = "mesh");
 // `count` (> 0) open cylinders ("cyl_000", ...; tubes without caps) with seeded random centres in
 // [-1, 1]^3 and random directions, so that some but far from all pairs interpenetrate; about
 // request.triangles in all. Frames bow each tube sideways (its own direction and amplitude) as
@@ -76,6 +81,6 @@ Animation makeSheets(size_t count, double tiltDegrees, const SceneRequest& reque
 // A twist of `base` about the longest axis of its bounding box, through the box centre: the angle
 // varies linearly along that axis over +-45 degrees at full twist, and grows from 0 (frame 0: the
 // mesh unchanged) to full (last frame). Coordinates along the axis do not change.
-Animation makeTwistAnimation(const Mesh& base, const SceneRequest& request);
+Animation makeTwistAnimation(const Mesh& base, const SceneRequest& request, const std::string& source = "mesh");
 
 }  // namespace cullide

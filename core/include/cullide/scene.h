@@ -48,7 +48,9 @@ struct Scene {
 
     size_t triangleCount() const;
     size_t vertexCount() const;
-    // Object i's mesh with its transform applied (same triangles, world positions).
+    // Object i's mesh with its transform applied (same triangles, world positions). Throws
+    // InputError("scene", ...) when a world coordinate is beyond kMaxWorldCoordinate or not finite
+    // (a scene built in code; loaded scenes were checked with their file's name).
     Mesh worldMesh(size_t i) const;
 };
 
@@ -62,7 +64,8 @@ struct FlatScene {
 
     uint32_t triangle(uint32_t object, uint32_t t) const { return firstTriangle[object] + t; }
 };
-// Throws InputError("scene", ...) when the scene has more than 2^32 vertices or triangles.
+// Throws InputError("scene", ...) when the scene has more than 2^32 vertices or triangles, or a
+// world coordinate that Scene::worldMesh refuses.
 FlatScene flatten(const Scene& scene);
 
 // What one frame of an animation changes for one object.
@@ -85,12 +88,36 @@ struct Animation {
 
     size_t frameCount() const { return frames.empty() ? 1 : frames.size(); }
     // The scene as it is at frame f (f < frameCount()). Throws InputError(file, ...) when a
-    // pose's positionsFile no longer reads as it did (gone, changed vertex count, non-finite).
+    // pose's positionsFile no longer reads as it did (gone, changed vertex count, non-finite, world
+    // coordinates checkWorldPositions refuses).
     Scene sceneAt(size_t f) const;
 };
 
-// Throws InputError(source, ...) when a frame does not fit the base scene (wrong number of
-// poses, wrong number of positions, non-finite positions or transforms).
+// The largest magnitude a world coordinate may have. The exact predicates decide on coordinates up
+// to 2^60 (docs/oracle.md), so every scene is held to it where its world geometry is made: a
+// transform that overflows float (Inf, NaN) or goes beyond it is refused when the scene is loaded
+// or built, not when the oracle meets it.
+inline constexpr float kMaxWorldCoordinate = 0x1p60f;
+
+// Throws InputError(source, where + "object 'name': ...") unless every one of `positions` under
+// `transform` (applyTransform, in float) has finite coordinates of magnitude at most
+// kMaxWorldCoordinate. `where` ("frame 3") may be empty.
+void checkWorldPositions(std::span<const Vec3f> positions, const Transform& transform, const std::string& objectName,
+                         const std::string& source, const std::string& where);
+
+// Throws InputError(source, where + ": ...") when `name` cannot name a new object of a scene: it is
+// empty, or `taken` (an earlier object has it). Frames and results name objects, so a name is a
+// key; scene files and the Python API refuse the same names. `where` may be empty.
+void checkObjectName(const std::string& name, bool taken, const std::string& source, const std::string& where);
+// Throws InputError(source, ...) when the scene has no objects, or an object's name fails
+// checkObjectName.
+void checkSceneObjects(const Scene& scene, const std::string& source);
+
+// Throws InputError(source, ...) when the animation is not one cullide can use: objects as
+// checkSceneObjects wants them; a frame that does not fit the base scene (wrong number of poses,
+// wrong number of positions, non-finite positions or transforms); world coordinates, in the base
+// scene or any frame held in memory, that checkWorldPositions refuses. (A frame's positions file
+// is checked where it is read: by the scene loader, and again by sceneAt.)
 void validateAnimation(const Animation& animation, const std::string& source);
 // Throws InputError(source, where + ...) unless `positions` fit `object`'s mesh (same vertex
 // count, all finite).

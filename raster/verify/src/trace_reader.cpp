@@ -178,11 +178,60 @@ TraceReader::TraceReader(std::filesystem::path path) : path_(std::move(path)), p
             }
             frames_.push_back(info);
         }
+        checkSummary();
+        if (frames_.empty()) throw std::invalid_argument("frames is empty: a trace records at least one frame");
     } catch (const std::invalid_argument& e) {
         fail(e.what());
     } catch (const nlohmann::json::exception& e) {
         fail(std::string("the header: ") + e.what());
     }
+}
+
+// The summary's counts are statements about the data: a reader that took them on trust would
+// judge a trace whose frames were emptied (no queries: "every query lies in its interval").
+void TraceReader::checkSummary() const {
+    const Json& summary = field(header_, "summary", "the header");
+    uint64_t commands = 0, queries = 0;
+    for (const ListInfo& l : lists_) commands += l.commands.rows, queries += l.queries;
+    const std::pair<const char*, uint64_t> counts[] = {{"frames", frames_.size()},
+                                                       {"lists", lists_.size()},
+                                                       {"commands", commands},
+                                                       {"queries", queries},
+                                                       {"triangles_drawn", trianglesDrawn()}};
+    for (const auto& [key, count] : counts) {
+        const uint64_t said = unsignedField(summary, key, "summary", std::numeric_limits<uint64_t>::max());
+        if (said != count)
+            throw std::invalid_argument("summary." + std::string(key) + " is " + std::to_string(said) +
+                                        ", but the trace has " + std::to_string(count) +
+                                        " (the header disagrees with its data)");
+    }
+}
+
+// The triangles the lists' draw commands draw, each list's commands read once, one list at a
+// time. A draw beyond its frame's triangles is refused here as readList refuses it.
+uint64_t TraceReader::trianglesDrawn() const {
+    uint64_t drawn = 0;
+    std::vector<uint32_t> rows;
+    for (size_t l = 0; l < lists_.size(); ++l) {
+        const ListInfo& info = lists_[l];
+        rows.resize(size_t(info.commands.rows) * 4);
+        readBlob(info.commands, 4, 4, rows.data());
+        const FrameInfo& frame = frames_[info.frameIndex];
+        for (size_t k = 0; k < info.commands.rows; ++k) {
+            if (rows[4 * k] != OpDraw) continue;
+            const uint64_t first = rows[4 * k + 1], count = rows[4 * k + 2];
+            if (first + count > frame.triangles.rows) fail(drawPastTheEnd(l, k, first, count));
+            drawn += count;
+        }
+    }
+    return drawn;
+}
+
+std::string TraceReader::drawPastTheEnd(size_t list, size_t command, uint64_t first, uint64_t count) const {
+    const FrameInfo& frame = frames_[lists_[list].frameIndex];
+    return "list " + std::to_string(list) + " (frame " + std::to_string(frame.frame) + ") command " +
+        std::to_string(command) + ": draws triangles [" + std::to_string(first) + ", " + std::to_string(first + count) +
+        "), but the frame has " + std::to_string(frame.triangles.rows);
 }
 
 TraceReader::BlobRef TraceReader::parseBlob(const Json& j, const std::string& where, const char* dtype,
@@ -281,9 +330,7 @@ TraceList TraceReader::readList(size_t index) const {
                     break;
                 case OpDraw:
                     unused(c == 0);
-                    if (uint64_t(a) + b > frame.triangles.rows)
-                        fail(cw + ": draws triangles [" + std::to_string(a) + ", " + std::to_string(uint64_t(a) + b) +
-                             "), but the frame has " + std::to_string(frame.triangles.rows));
+                    if (uint64_t(a) + b > frame.triangles.rows) fail(drawPastTheEnd(index, k, a, b));
                     out.commands.draw(a, b);
                     break;
                 default: fail(cw + ": unknown op " + std::to_string(op) + " (version 1 has 0..5)");

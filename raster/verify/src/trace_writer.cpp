@@ -1,11 +1,15 @@
 // Writing trace files: the header's rules, views and command rows, the blobs staged in a scratch
 // file, and the file assembled and renamed into place (cullide/raster/trace.h, docs/trace-format.md).
+// Both files are unnamed while they are written (O_TMPFILE), so a recording that dies, killed
+// or not, leaves nothing beside its output.
 #include "cullide/raster/trace.h"
 
 #include "trace_format.h"
 
 #include "cullide/error.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -82,29 +86,102 @@ std::array<uint32_t, 4> encodeCommand(const Command& c) {
     refuseConservative();
 }
 
+// "cannot write: <cause>" for `path`, or, when its folder is missing, that.
+InputError cannotWrite(const std::filesystem::path& path, int err) {
+    const std::filesystem::path folder = path.parent_path();
+    std::error_code ec;
+    if (err == ENOENT && !folder.empty() && !std::filesystem::exists(folder, ec))
+        return InputError(path.string(), "folder " + folder.string() + " does not exist");
+    return InputError(path.string(), std::string("cannot write: ") + std::strerror(err));
+}
+
 }  // namespace
+
+// A file being written for `destination`, in its folder (same file system: the final rename is
+// atomic). Where the file system has O_TMPFILE it has no name until commit(), so no death of the
+// process leaves it behind; elsewhere it is a temporary named after the destination, removed by
+// the destructor unless committed (a kill -9 then leaves it: the one case that can).
+class TraceWriter::PendingFile {
+public:
+    explicit PendingFile(std::filesystem::path destination) : destination_(std::move(destination)) {
+        const std::filesystem::path folder = destination_.parent_path().empty() ? "." : destination_.parent_path();
+        // Naming an unnamed file needs /proc/self/fd (linkat of its descriptor).
+        if (::access("/proc/self/fd", X_OK) == 0) fd_ = ::open(folder.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0666);
+        if (fd_ < 0) {  // no O_TMPFILE here, or another problem, which the named open then reports
+            static std::atomic<unsigned> counter{0};
+            named_ = destination_;
+            named_ += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+            fd_ = ::open(named_.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, 0666);
+            if (fd_ < 0) throw cannotWrite(destination_, errno);
+        }
+        file_ = ::fdopen(fd_, "w+b");
+        if (!file_) {
+            const int err = errno;
+            discard();
+            throw cannotWrite(destination_, err);
+        }
+    }
+    ~PendingFile() { discard(); }
+    PendingFile(const PendingFile&) = delete;
+    PendingFile& operator=(const PendingFile&) = delete;
+
+    std::FILE* stream() const { return file_; }
+
+    // A scratch file that is never committed: its name, if it has one, goes now.
+    void unname() {
+        if (!named_.empty()) ::unlink(named_.c_str());
+        named_.clear();
+    }
+
+    // Flushes the file and gives it the destination's name (replacing a file there); throws
+    // InputError(destination, ...) and leaves nothing when that fails.
+    void commit() {
+        int err = 0;
+        if (std::fflush(file_) != 0) err = errno;
+        std::filesystem::path named = named_;
+        if (err == 0 && named.empty()) {  // O_TMPFILE: a name beside the destination, then the rename
+            static std::atomic<unsigned> counter{0};
+            named = destination_;
+            named += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+            const std::string self = "/proc/self/fd/" + std::to_string(fd_);
+            if (::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, named.c_str(), AT_SYMLINK_FOLLOW) != 0) err = errno;
+            else named_ = named;
+        }
+        if (std::fclose(file_) != 0 && err == 0) err = errno;
+        file_ = nullptr;
+        fd_ = -1;
+        if (err == 0 && std::rename(named_.c_str(), destination_.c_str()) != 0) err = errno;
+        if (err != 0) {
+            discard();
+            throw cannotWrite(destination_, err);
+        }
+        named_.clear();
+    }
+
+private:
+    void discard() {
+        if (file_) std::fclose(file_);
+        else if (fd_ >= 0) ::close(fd_);
+        file_ = nullptr;
+        fd_ = -1;
+        unname();
+    }
+
+    std::filesystem::path destination_, named_;
+    int fd_ = -1;
+    std::FILE* file_ = nullptr;
+};
 
 TraceWriter::TraceWriter(std::filesystem::path path, const TraceRules& rules, Json workload, Json provenance)
     : path_(std::move(path)), rules_(rules), workload_(std::move(workload)), provenance_(std::move(provenance)) {
-    static std::atomic<unsigned> counter{0};
-    scratchPath_ = path_;
-    scratchPath_ += ".blobs.tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
-    scratch_ = std::fopen(scratchPath_.string().c_str(), "w+b");
-    if (!scratch_) {
-        const int openErrno = errno;
-        const std::filesystem::path folder = path_.parent_path();
-        std::error_code ec;
-        if (!folder.empty() && !std::filesystem::exists(folder, ec))
-            throw InputError(path_.string(), "folder " + folder.string() + " does not exist");
-        throw InputError(path_.string(), std::string("cannot write: ") + std::strerror(openErrno));
-    }
+    // Beside the destination (its file system has room for the trace), never named for longer
+    // than its creation takes.
+    scratchFile_ = std::make_unique<PendingFile>(path_);
+    scratchFile_->unname();
+    scratch_ = scratchFile_->stream();
 }
 
-TraceWriter::~TraceWriter() {
-    if (scratch_) std::fclose(scratch_);
-    std::error_code ec;
-    std::filesystem::remove(scratchPath_, ec);
-}
+TraceWriter::~TraceWriter() = default;
 
 Json TraceWriter::blob(const void* data, size_t bytes, const char* dtype, size_t rows, size_t cols) {
     static const char zeros[8] = {};
@@ -216,32 +293,19 @@ uint64_t TraceWriter::finish() {
     for (int i = 0; i < 8; ++i) head.push_back(char((length >> (8 * i)) & 0xff));
     head += text;
 
-    // The file: preamble and header, then the scratch file's bytes, renamed into place.
-    static std::atomic<unsigned> counter{0};
-    std::filesystem::path tmp = path_;
-    tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
-    std::FILE* out = std::fopen(tmp.string().c_str(), "wb");
-    if (!out) throw InputError(where, std::string("cannot write: ") + std::strerror(errno));
-    bool ok = std::fwrite(head.data(), 1, head.size(), out) == head.size();
+    // The file: preamble and header, then the scratch file's bytes, named into place at the end.
+    PendingFile out(path_);
+    bool ok = std::fwrite(head.data(), 1, head.size(), out.stream()) == head.size();
     std::rewind(scratch_);
     std::vector<char> buf(1 << 20);
     size_t n;
     while (ok && (n = std::fread(buf.data(), 1, buf.size(), scratch_)) > 0)
-        ok = std::fwrite(buf.data(), 1, n, out) == n;
+        ok = std::fwrite(buf.data(), 1, n, out.stream()) == n;
     ok = ok && !std::ferror(scratch_);
-    const int err = errno;
-    ok = (std::fclose(out) == 0) && ok;
-    std::error_code ec;
-    if (!ok) {
-        std::filesystem::remove(tmp, ec);
-        throw InputError(where, std::string("cannot write: ") + std::strerror(err));
-    }
-    std::filesystem::rename(tmp, path_, ec);
-    if (ec) {
-        std::error_code ignored;
-        std::filesystem::remove(tmp, ignored);
-        throw InputError(where, "cannot write: " + ec.message());
-    }
+    if (!ok) throw InputError(where, std::string("cannot write: ") + std::strerror(errno));
+    out.commit();
+    scratchFile_.reset();
+    scratch_ = nullptr;
     return head.size() + binaryBytes_;
 }
 

@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -64,7 +65,9 @@ struct TraceList {
 
 // Writes a trace, streaming the blobs to a scratch file beside the destination so that memory
 // does not grow with the trace; finish() assembles the file and renames it into place (a reader
-// never sees half a trace; without finish() nothing is left behind). Same calls, same bytes.
+// never sees half a trace). Without finish(), even when the process is killed, nothing is left
+// behind: both files are unnamed while written (O_TMPFILE; where the file system lacks it, named
+// temporaries removed on every failure the process sees). Same calls, same bytes.
 class TraceWriter {
 public:
     // `workload` and `provenance` go into the header as they are (provenance without a date).
@@ -89,7 +92,9 @@ private:
     void scratchRead(uint64_t offset, void* out, size_t bytes);
     bool scratchEquals(uint64_t offset, const void* data, size_t bytes);
 
-    std::filesystem::path path_, scratchPath_;
+    std::filesystem::path path_;
+    class PendingFile;  // a file unnamed until it is committed (trace_writer.cpp)
+    std::unique_ptr<PendingFile> scratchFile_;  // owns scratch_
     std::FILE* scratch_ = nullptr;
     uint64_t binaryBytes_ = 0;
     TraceRules rules_;
@@ -100,8 +105,9 @@ private:
     bool finished_ = false;
 };
 
-// Reads a trace: the header at construction (fully checked: structure, blob bounds, shapes),
-// blobs on request (their contents checked as they are read).
+// Reads a trace: the header at construction (fully checked: structure, blob bounds, shapes, and
+// the summary's counts against the data, for which every list's commands are read once), blobs
+// on request (their contents checked as they are read). A trace without frames is refused.
 class TraceReader {
 public:
     explicit TraceReader(std::filesystem::path path);
@@ -139,6 +145,11 @@ private:
         size_t queries = 0;
     };
     BlobRef parseBlob(const nlohmann::ordered_json& j, const std::string& where, const char* dtype, size_t cols) const;
+    // Refuses a header whose "summary" counts differ from the frames, lists, commands, queries
+    // and drawn triangles the trace holds (std::invalid_argument naming the count).
+    void checkSummary() const;
+    uint64_t trianglesDrawn() const;
+    std::string drawPastTheEnd(size_t list, size_t command, uint64_t first, uint64_t count) const;
     void readBlob(const BlobRef& ref, size_t itemBytes, size_t cols, void* out) const;
     [[noreturn]] void fail(const std::string& problem) const;
 
