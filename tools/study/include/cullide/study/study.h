@@ -91,8 +91,11 @@ struct RunConfig {
     std::string id() const;
 };
 
-// The product of the spec's axes (validates every value first: InputError). File scenes are
-// opened to count their frames.
+// The most runs a sweep may have: expand refuses a larger one before it makes any.
+inline constexpr uint64_t kMaxStudyRuns = 1'000'000;
+
+// The product of the spec's axes (validates every value first: InputError; also when it has more
+// than kMaxStudyRuns runs). File scenes are opened to count their frames.
 std::vector<RunConfig> expand(const Spec& spec);
 
 // "i/N" with 0 <= i < N: the i-th of N contiguous slices of the sweep (scene-major, so a slice
