@@ -183,12 +183,14 @@ TEST(Study, SweepsOverTheRunLimitAreRefusedBeforeExpanding) {
         return "";
     };
     Spec s;
+    s.source = "sweep.json";
     s.scenes = {"bunny:500"};
     s.leafSizes.assign(1001, 16);
     s.threads.assign(1000, 1);
-    EXPECT_NE(refusal(s).find("the sweep has 1001000 runs (1 scene frames x 1001000 configurations), more than the "
-                              "limit of 1000000 runs"),
-              std::string::npos)
+    EXPECT_EQ(refusal(s).rfind("sweep.json: the sweep has 1001000 runs (1 scene frames x 1001000 configurations), "
+                               "more than the limit of 1000000 runs",
+                               0),
+              0u)
         << refusal(s);
     for (std::vector<std::string>* axis : {&s.methods, &s.resolutions, &s.depths, &s.directions, &s.hierarchies})
         axis->assign(10000, axis->front());

@@ -102,6 +102,7 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
     const FieldReader r(source);
     Spec s;
     s.names = specOptionNames(source);
+    s.source = source;
     for (const auto& [key, v] : j.items()) {
         if (key == "scenes") {
             s.scenes = r.texts(v, key, [](const std::string&) { return 0; });  // checked when expanded

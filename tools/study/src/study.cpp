@@ -240,7 +240,7 @@ std::vector<RunConfig> expand(const Spec& spec) {
     const auto tooMany = [&](uint64_t frames) {
         const uint64_t runs = product(frames, perFrame);
         if (runs <= kMaxStudyRuns) return;
-        throw InputError("study spec",
+        throw InputError(spec.source,
                          "the sweep has " + shown(runs) + " runs (" + std::to_string(frames) + " scene frames x " +
                              shown(perFrame) + " configurations), more than the limit of " +
                              std::to_string(kMaxStudyRuns) + " runs: split it into several studies");

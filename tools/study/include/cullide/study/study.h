@@ -60,6 +60,8 @@ struct Spec {
     bool oracle = true;  // measure against the oracle and attribute causes
     // Each axis' name in errors: its spec key, or the command-line option that set it.
     OptionNames names = specOptionNames("study spec");
+    // What errors about the whole sweep name: the spec file it was read from.
+    std::string source = "study spec";
 };
 
 // Reads a JSON spec: {"scenes": [...], "methods": [...], "resolutions": [...], "depths": [...],
