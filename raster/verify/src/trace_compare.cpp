@@ -16,7 +16,7 @@ using namespace trace_format;
 
 TraceResults readTraceResults(const std::filesystem::path& path) {
     const std::string where = path.string();
-    // 256 MiB: some 20 million query results.
+    // 256 MiB: at least 12 million query results (20 digits each at most).
     constexpr JsonLimits kResultsJson{.kind = "a results file", .maxBytes = uint64_t(256) << 20};
     const Json j = parseOrderedJson(readFile(path, kResultsJson.maxBytes, kResultsJson.kind), where, kResultsJson);
     if (!j.is_object()) throw InputError(where, "not a results file (a JSON object with \"backend\" and \"results\")");
