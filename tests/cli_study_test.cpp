@@ -31,7 +31,7 @@ TEST(Cli, StudySpecWithAnOverflowingNumberIsBadInput) {
     std::ofstream(d / "spec.json") << R"({"scenes": [1e99999]})";
     const CliRun r = runCli("study " + quote((d / "spec.json").string()) + " -q -o " + quote((d / "s.csv").string()));
     EXPECT_EQ(r.status, 2) << r.output;
-    EXPECT_NE(r.output.find((d / "spec.json").string() + ": not JSON"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find((d / "spec.json").string() + ": malformed JSON"), std::string::npos) << r.output;
 }
 
 // A valid spec mutated field by field (wrong type, empty list, huge and negative numbers) and an

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -91,6 +92,74 @@ TEST(FileIo, UnreadableIsNamed) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("directory"), std::string::npos) << e.what();
     }
+}
+
+// Trap: input that is not a regular file: a FIFO blocked the open forever (no writer comes), a
+// device never ends (/dev/zero grew to 16.8 GB, then "out of memory" without the file). Refused
+// before the open, naming the kind, by readFile and by inputFileSize (readers that open the file
+// themselves); a file over the size bound is refused before it is read.
+TEST(FileIo, OnlyRegularFilesOfBoundedSizeAreInput) {
+    const fs::path d = freshDir("special");
+    ASSERT_EQ(::mkfifo((d / "fifo.off").c_str(), 0600), 0);
+    struct Case {
+        fs::path path;
+        const char* cause;
+    };
+    for (const Case& c : {Case{d / "fifo.off", "cannot read: not a regular file (a FIFO)"},
+                          Case{"/dev/zero", "cannot read: not a regular file (a character device)"},
+                          Case{d, "cannot read: it is a directory, not a file"}}) {
+        if (!fs::exists(c.path)) continue;
+        for (int reader = 0; reader < 2; ++reader) {
+            try {
+                if (reader == 0) (void)readFile(c.path);
+                else (void)inputFileSize(c.path);
+                ADD_FAILURE() << c.path << " read";
+            } catch (const InputError& e) {
+                EXPECT_EQ(e.source(), c.path.string());
+                EXPECT_NE(std::string(e.what()).find(c.cause), std::string::npos) << e.what();
+            }
+        }
+    }
+    writeFileAtomically(d / "eleven.txt", "eleven byte");
+    EXPECT_EQ(readFile(d / "eleven.txt", 11), "eleven byte");
+    try {
+        (void)readFile(d / "eleven.txt", 10, "a test file");
+        FAIL() << "read past its bound";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("11 bytes, over the limit of 10 bytes for a test file"), std::string::npos)
+            << e.what();
+    }
+}
+
+// Trap: paths whose cause was lost: a symbolic link loop said "no such file"; a path with a NUL
+// byte (possible from Python and from a scene's JSON) opened the file named by its part before the
+// NUL, or printed a message cut at the NUL. Both are refused with their cause, the NUL shown as \0,
+// for reading and writing alike.
+TEST(FileIo, SymlinkLoopsAndNulBytesAreSaidSo) {
+    const fs::path d = freshDir("paths");
+    fs::create_symlink(d / "b.off", d / "a.off");
+    fs::create_symlink(d / "a.off", d / "b.off");
+    try {
+        (void)readFile(d / "a.off");
+        FAIL() << "read a loop";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("cannot open: too many levels of symbolic links"), std::string::npos)
+            << e.what();
+    }
+    writeFileAtomically(d / "x", "real");
+    const fs::path withNul = (d / "x").string() + std::string("\0.off", 5);
+    const std::string shown = (d / "x").string() + "\\0.off";
+    for (int op = 0; op < 2; ++op) {
+        try {
+            if (op == 0) (void)readFile(withNul);
+            else writeFileAtomically(withNul, "overwritten?");
+            FAIL() << "used the part before the NUL";
+        } catch (const InputError& e) {
+            EXPECT_EQ(e.source(), shown);
+            EXPECT_NE(std::string(e.what()).find("the path contains a NUL byte"), std::string::npos) << e.what();
+        }
+    }
+    EXPECT_EQ(readFile(d / "x"), "real");
 }
 
 }  // namespace

@@ -96,6 +96,8 @@ INSTANTIATE_TEST_SUITE_P(
                       BadScene{"bad/wrong_position_count.json",
                                "has 8 vertices, but object 'a' has 7 (wrong position count)"},
                       BadScene{"bad/missing_mesh.json", "no_such_mesh.off: cannot open: no such file"},
+                      BadScene{"bad/nul_in_mesh_path.json",
+                               "polys.off\\0.ply: cannot open: the path contains a NUL byte"},
                       BadScene{"bad/nonfinite_transform.json", "is not a finite float"},
                       BadScene{"bad/overflow_transform.json", "object 'cow': world coordinates overflow"},
                       BadScene{"bad/overflow_frame.json", "frame 3, object 'cow': world coordinates overflow"},

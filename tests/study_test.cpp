@@ -153,7 +153,10 @@ TEST(Study, ResumeSkipsDoneRunsAndHealsACutLine) {
     EXPECT_EQ(runStudy(o), 4u);
     EXPECT_EQ(runStudy(o), 0u);
     {
+        // Lines that are no records of ours are skipped too: an id that is not a string (it ended
+        // the resume in a type_error, exit 70) and nesting past the JSON reader's depth.
         std::ofstream f(dir / "r.jsonl", std::ios::app);
+        f << "{\"id\": 5}\n" << std::string(1000, '[') << std::string(1000, ']') << "\n";
         f << "{\"index\": 3, \"id\": \"cut";
     }
     EXPECT_EQ(runStudy(o), 0u);
@@ -165,6 +168,56 @@ TEST(Study, ResumeSkipsDoneRunsAndHealsACutLine) {
                                                     << recs[2].dump() << "\n";
     EXPECT_EQ(runStudy(o), 1u);
     EXPECT_EQ(readRecords(dir / "r.jsonl").size(), 4u);
+}
+
+// Trap: a sweep is the product of its axes: a spec of a few lines (or a few command-line lists)
+// made 7.5x10^7 runs that grew to 8 GB before anything ran. Refused before it is expanded, with
+// its count, whether the configurations alone or the scenes' frames take it over the limit.
+TEST(Study, SweepsOverTheRunLimitAreRefusedBeforeExpanding) {
+    auto refusal = [](const Spec& s) -> std::string {
+        try {
+            (void)expand(s);
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    Spec s;
+    s.source = "sweep.json";
+    s.scenes = {"bunny:500"};
+    s.leafSizes.assign(1001, 16);
+    s.threads.assign(1000, 1);
+    EXPECT_EQ(refusal(s).rfind("sweep.json: the sweep has 1001000 runs (1 scene frames x 1001000 configurations), "
+                               "more than the limit of 1000000 runs",
+                               0),
+              0u)
+        << refusal(s);
+    for (std::vector<std::string>* axis : {&s.methods, &s.resolutions, &s.depths, &s.directions, &s.hierarchies})
+        axis->assign(10000, axis->front());
+    EXPECT_NE(refusal(s).find("the sweep has over 2^64 runs (1 scene frames x over 2^64 configurations)"),
+              std::string::npos)
+        << refusal(s);
+    for (std::vector<std::string>* axis : {&s.methods, &s.resolutions, &s.hierarchies}) axis->resize(1);
+    s.depths = {"24"}, s.directions = {"axes"}, s.leafSizes = {16};
+    s.scenes = {"bunny:500", "cows:800"};
+    s.threads.assign(kMaxStudyRuns / 2 + 1, 1);
+    EXPECT_NE(refusal(s).find("the sweep has 1000002 runs (2 scene frames x 500001 configurations)"), std::string::npos)
+        << refusal(s);
+}
+
+// Trap: a study spec that gives a field twice: the JSON parser kept the last value without a
+// word. Refused, naming the key.
+TEST(Study, SpecKeysGivenTwiceAreRefused) {
+    test::TempDir dir;
+    std::ofstream(dir / "spec.json") << R"({"scenes": "bunny:500", "depths": [16], "depths": [24]})";
+    try {
+        (void)loadSpec((dir / "spec.json").string());
+        FAIL() << "accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find((dir / "spec.json").string() + ": duplicate key 'depths'"),
+                  std::string::npos)
+            << e.what();
+    }
 }
 
 // samplePair's measures the way it took them before it drew a tile: each triangle alone over the

@@ -324,7 +324,7 @@ TEST(Trace, HandEditedTracesAreRefusedWithTheProblemNamed) {
     text.append((8 - (16 + text.size()) % 8) % 8, ' ');
     const uint64_t length = text.size();
     const std::string huge = "CULTRACE" + std::string(reinterpret_cast<const char*>(&length), 8) + text + good.binary;
-    EXPECT_TRUE(has(readError(dir, huge), "not valid JSON"));
+    EXPECT_TRUE(has(readError(dir, huge), "the header: malformed JSON"));
 
     // Blob contents: the first list's commands and queries, the first frame's geometry.
     const Json& list0 = good.header["frames"][0]["lists"][0];

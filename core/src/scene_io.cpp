@@ -2,14 +2,15 @@
 //
 // Parsing is strict: every key is known, every value has the documented type, every number is a
 // finite float. Transforms are composed as  T * R * S  (scale first, then rotate, then
-// translate), evaluated in double and rounded once to float. JSON is parsed by nlohmann-json with
-// a callback that refuses duplicate keys (nlohmann would silently keep the last one).
+// translate), evaluated in double and rounded once to float. JSON is read by readJsonFile
+// (json_read.h: duplicate keys, nesting and size bounded).
 // Writing is deterministic: keys in a fixed order, numbers as the shortest decimal that reads
 // back to the same double (every float is exactly a double), meshes as OFF (writeOff).
 #include "cullide/scene_io.h"
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
+#include "cullide/json_read.h"
 #include "cullide/mesh_io.h"
 
 #include <nlohmann/json.hpp>
@@ -27,12 +28,15 @@ namespace fs = std::filesystem;
 using Json = nlohmann::json;
 using OrderedJson = nlohmann::ordered_json;
 
+// 256 MiB: about five million objects.
+constexpr JsonLimits kSceneJson{.kind = "a scene file", .maxBytes = uint64_t(256) << 20};
+
 class SceneParser {
 public:
     SceneParser(fs::path path) : path_(std::move(path)), src_(path_.string()), dir_(path_.parent_path()) {}
 
     Animation parse() {
-        const Json root = parseJson(readFile(path_));
+        const Json root = readJsonFile(path_, kSceneJson);
         Animation a;
         requireObject(root, "the top level");
         allowKeys(root, "the top level", {"objects", "animation"});
@@ -50,7 +54,9 @@ public:
             checkObjectName(obj.name, byName.contains(obj.name), src_, where);
             byName.emplace(obj.name, i);
             const std::string meshRef = requireString(requireKey(o, "mesh", where), where + ".mesh");
-            obj.mesh = loadReferencedMesh(meshRef, "object '" + obj.name + "'");
+            // Instances of one mesh in a row read its file once.
+            const bool again = i > 0 && meshRef == objects[i - 1]["mesh"];
+            obj.mesh = again ? a.scene.objects.back().mesh : loadReferencedMesh(meshRef, "object '" + obj.name + "'");
             if (o.contains("transform")) obj.transform = parseTransform(o["transform"], where + ".transform");
             a.scene.objects.push_back(std::move(obj));
         }
@@ -68,47 +74,6 @@ public:
 
 private:
     [[noreturn]] void fail(const std::string& cause) const { throw InputError(src_, cause); }
-
-    Json parseJson(const std::string& text) const {
-        std::vector<std::set<std::string>> keys;  // one per open JSON object
-        std::string duplicate;
-        auto callback = [&](int, Json::parse_event_t event, Json& parsed) {
-            switch (event) {
-                case Json::parse_event_t::object_start: keys.emplace_back(); break;
-                case Json::parse_event_t::object_end:
-                    if (!keys.empty()) keys.pop_back();
-                    break;
-                case Json::parse_event_t::key:
-                    if (!keys.empty() && !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty())
-                        duplicate = parsed.get<std::string>();
-                    break;
-                default: break;
-            }
-            return true;
-        };
-        Json j;
-        try {
-            j = Json::parse(text, callback, /*allow_exceptions=*/true, /*ignore_comments=*/false);
-        } catch (const Json::parse_error& e) {
-            // e.byte is the 1-based offset of the last character read.
-            const size_t p = std::min<size_t>(e.byte == 0 ? 0 : e.byte - 1, text.size());
-            size_t line = 1, lineStart = 0;
-            for (size_t i = 0; i < p; ++i)
-                if (text[i] == '\n') ++line, lineStart = i + 1;
-            std::string what = e.what();
-            const size_t colon = what.find(": ");
-            if (colon != std::string::npos) what = what.substr(colon + 2);
-            fail("malformed JSON at line " + std::to_string(line) + ", column " + std::to_string(p - lineStart + 1) +
-                 ": " + what);
-        } catch (const Json::exception& e) {
-            std::string what = e.what();
-            const size_t bracket = what.find("] ");
-            if (bracket != std::string::npos) what = what.substr(bracket + 2);
-            fail("malformed JSON: " + what);
-        }
-        if (!duplicate.empty()) fail("malformed JSON: duplicate key '" + duplicate + "'");
-        return j;
-    }
 
     static std::string typeName(const Json& j) { return j.type_name(); }
 

@@ -177,6 +177,7 @@ def main():
          '{"objects": [{"name": "a", "mesh": "../good/polys.off"}],\n'
          ' "animation": {"frames": [{"objects": {"a": {"positions": "../good/cube_binary.stl"}}}]}}\n'),
         ("missing_mesh.json", '{"objects": [{"name": "a", "mesh": "no_such_mesh.off"}]}\n'),
+        ("nul_in_mesh_path.json", '{"objects": [{"name": "a", "mesh": "../good/polys.off\\u0000.ply"}]}\n'),
         ("nonfinite_transform.json",
          '{"objects": [{"name": "a", "mesh": "../good/polys.off", "transform": {"translate": [0, 1e39, 0]}}]}\n'),
         # Each number a finite float, but the world coordinates they make are not.

@@ -1,15 +1,33 @@
 // Reading input files whole; writing output files all or nothing.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
 
 namespace cullide {
 
-// The bytes of the file at `path`. Throws InputError(path, cause) when it cannot be read ("cannot
-// open: no such file", "cannot read: it is a directory, not a file", an I/O error).
-std::string readFile(const std::filesystem::path& path);
+// The largest input file read whole unless a reader says otherwise (meshes: 4 GiB holds a binary
+// STL of 85 million triangles, more than the 2^32 vertices a mesh may index).
+inline constexpr uint64_t kMaxInputFileBytes = uint64_t(4) << 30;
+
+// `path` as messages show it: a NUL byte in it written as "\0" (a C string would end there).
+std::string pathText(const std::filesystem::path& path);
+
+// The size of the regular file at `path`, which an input reader may then open. Only regular files
+// are input: opening a FIFO blocks until a writer comes, a device never ends. Throws
+// InputError(pathText(path), cause): "cannot open: no such file", "cannot open: too many levels of
+// symbolic links", "cannot open: the path contains a NUL byte", "cannot read: it is a directory,
+// not a file", "cannot read: not a regular file (a FIFO)" (a character device, a block device, a
+// socket), or the system's cause.
+uint64_t inputFileSize(const std::filesystem::path& path);
+
+// The bytes of the regular file at `path` (inputFileSize's checks), at most `maxBytes` of them:
+// a larger file is refused before it is read ("N bytes, over the limit of M bytes for `kind`").
+// Also InputError(path, cause) for an I/O error, or no memory for its bytes.
+std::string readFile(const std::filesystem::path& path, uint64_t maxBytes = kMaxInputFileBytes,
+                     std::string_view kind = "an input file");
 
 // Writes `bytes` to `path` through a temporary file beside it (unique per process and call)
 // and a rename, so a reader never sees a half-written file and a failed write leaves nothing.

@@ -6,6 +6,7 @@
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
+#include "cullide/json_read.h"
 
 #include <algorithm>
 
@@ -15,13 +16,9 @@ using namespace trace_format;
 
 TraceResults readTraceResults(const std::filesystem::path& path) {
     const std::string where = path.string();
-    const std::string text = readFile(path);
-    Json j;
-    try {
-        j = Json::parse(text);
-    } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for 1e99999
-        throw InputError(where, std::string("not valid JSON: ") + e.what());
-    }
+    // 256 MiB: at least 12 million query results (20 digits each at most).
+    constexpr JsonLimits kResultsJson{.kind = "a results file", .maxBytes = uint64_t(256) << 20};
+    const Json j = parseOrderedJson(readFile(path, kResultsJson.maxBytes, kResultsJson.kind), where, kResultsJson);
     if (!j.is_object()) throw InputError(where, "not a results file (a JSON object with \"backend\" and \"results\")");
     TraceResults r;
     const auto backend = j.find("backend");

@@ -5,6 +5,8 @@
 #include "trace_format.h"
 
 #include "cullide/error.h"
+#include "cullide/file_io.h"
+#include "cullide/json_read.h"
 
 #include <bit>
 #include <cerrno>
@@ -18,6 +20,9 @@ namespace cullide::raster {
 using namespace trace_format;
 
 namespace {
+
+// 256 MiB: some 350,000 command lists (a list takes some 730 bytes of header).
+constexpr JsonLimits kHeaderJson{.kind = "a trace header", .maxBytes = uint64_t(256) << 20, .part = "the header"};
 
 // Checked access to the header, naming where a problem is ("frames[2].lists[5].view").
 const Json& field(const Json& obj, const char* key, const std::string& where) {
@@ -98,12 +103,7 @@ void TraceReader::fail(const std::string& problem) const {
 }
 
 TraceReader::TraceReader(std::filesystem::path path) : path_(std::move(path)), pathText_(path_.string()) {
-    std::error_code ec;
-    const auto status = std::filesystem::status(path_, ec);
-    if (ec || !std::filesystem::exists(status)) fail("cannot open: no such file");
-    if (std::filesystem::is_directory(status)) fail("cannot read: it is a directory, not a file");
-    fileBytes_ = std::filesystem::file_size(path_, ec);
-    if (ec) fail("cannot read: " + ec.message());
+    fileBytes_ = inputFileSize(path_);  // a regular file (a FIFO would block the open)
     std::ifstream in(path_, std::ios::binary);
     if (!in) fail("cannot open: " + std::string(std::strerror(errno)));
     char pre[kPreamble];
@@ -115,13 +115,10 @@ TraceReader::TraceReader(std::filesystem::path path) : path_(std::move(path)), p
     if (length > fileBytes_ - kPreamble)
         fail("truncated: the preamble announces a " + fileSize(length) + " header, the file has " +
              fileSize(fileBytes_ - kPreamble) + " after the preamble");
+    checkJsonSize(length, pathText_, kHeaderJson);  // before its bytes are read into memory
     std::string text(size_t(length), '\0');
     if (!in.read(text.data(), std::streamsize(length))) fail("cannot read the header");
-    try {
-        header_ = Json::parse(text);
-    } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for 1e99999
-        fail(std::string("the header is not valid JSON: ") + e.what());
-    }
+    header_ = parseOrderedJson(text, pathText_, kHeaderJson);
     binaryStart_ = kPreamble + length;
 
     try {

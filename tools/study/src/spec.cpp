@@ -5,11 +5,11 @@
 #include "cullide/cullide.h"
 #include "cullide/error.h"
 #include "cullide/hierarchy.h"
+#include "cullide/json_read.h"
 #include "cullide/options.h"
 #include "cullide/raster/backends.h"
 
 #include <algorithm>
-#include <fstream>
 #include <string>
 
 namespace cullide::study {
@@ -102,6 +102,7 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
     const FieldReader r(source);
     Spec s;
     s.names = specOptionNames(source);
+    s.source = source;
     for (const auto& [key, v] : j.items()) {
         if (key == "scenes") {
             s.scenes = r.texts(v, key, [](const std::string&) { return 0; });  // checked when expanded
@@ -153,13 +154,9 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
 }
 
 Spec loadSpec(const std::string& path) {
-    std::ifstream f(path);
-    if (!f) throw InputError(path, "cannot open the study spec");
-    try {
-        return parseSpec(nlohmann::json::parse(f), path);
-    } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for 1e99999
-        throw InputError(path, std::string("not JSON: ") + e.what());
-    }
+    // 1 MiB: a spec lists a few values per axis; its size is no bound on its runs (expand's is).
+    constexpr JsonLimits kSpecJson{.kind = "a study spec", .maxBytes = uint64_t(1) << 20};
+    return parseSpec(readJsonFile(path, kSpecJson), path);
 }
 
 }  // namespace cullide::study

@@ -9,6 +9,7 @@
 #include "cullide/error.h"
 #include "cullide/file_io.h"
 #include "cullide/generators.h"
+#include "cullide/json_read.h"
 #include "cullide/mesh_io.h"
 #include "cullide/parallel.h"
 #include "cullide/parse_number.h"
@@ -29,6 +30,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -237,9 +239,37 @@ std::vector<RunConfig> expand(const Spec& spec) {
         if (!raster::isBackendName(b))
             throw InputError("study spec", "backend '" + b + "': " + raster::backendNameList());
     for (int t : spec.threads) checkThreads(t, "study spec: threads");
+    // Counted before anything is expanded (a few axes of a few hundred values make billions of
+    // runs): the configurations per frame first, then per scene as its frames are known.
+    constexpr uint64_t kSaturated = std::numeric_limits<uint64_t>::max();
+    const auto product = [](uint64_t a, uint64_t b) {
+        uint64_t p;
+        return __builtin_mul_overflow(a, b, &p) ? kSaturated : p;
+    };
+    const auto shown = [](uint64_t n) { return n == kSaturated ? std::string("over 2^64") : std::to_string(n); };
+    uint64_t perFrame = 1;
+    for (size_t n : {spec.methods.size(), spec.resolutions.size(), spec.depths.size(), spec.directions.size(),
+                     spec.views.size(), spec.hierarchies.size(), spec.leafSizes.size(), spec.exactSwitches.size(),
+                     spec.backends.size(), spec.threads.size()})
+        perFrame = product(perFrame, n);
+    const auto tooMany = [&](uint64_t frames) {
+        const uint64_t runs = product(frames, perFrame);
+        if (runs <= kMaxStudyRuns) return;
+        throw InputError(spec.source,
+                         "the sweep has " + shown(runs) + " runs (" + std::to_string(frames) + " scene frames x " +
+                             shown(perFrame) + " configurations), more than the limit of " +
+                             std::to_string(kMaxStudyRuns) + " runs: split it into several studies");
+    };
+    tooMany(spec.scenes.size());  // at least a frame each
+    std::vector<std::vector<uint32_t>> frames;
+    uint64_t frameCount = 0;
+    for (const std::string& scene : spec.scenes) {
+        frames.push_back(framesOf(scene));
+        tooMany(frameCount += frames.back().size());
+    }
     std::vector<RunConfig> out;
-    for (const std::string& scene : spec.scenes)
-        for (uint32_t frame : framesOf(scene)) appendCombinations(spec, scene, frame, out);
+    for (size_t s = 0; s < spec.scenes.size(); ++s)
+        for (uint32_t frame : frames[s]) appendCombinations(spec, spec.scenes[s], frame, out);
     for (const RunConfig& c : out) (void)cullideOptions(c, spec.names);  // every value checked before any run
     return out;
 }
@@ -501,16 +531,20 @@ OutputPaths outputPaths(const std::filesystem::path& path) {
 
 std::vector<nlohmann::ordered_json> readRecords(const std::filesystem::path& path) {
     const OutputPaths p = outputPaths(path);
-    std::ifstream f(p.jsonl);
-    if (!f) throw InputError(p.jsonl.string(), "cannot open the study records (JSON lines)");
+    // A record is a few KiB; a line of more is no record of ours (and is skipped, as cut lines are).
+    constexpr JsonLimits kRecordJson{.kind = "a study record", .maxBytes = uint64_t(16) << 20};
+    const std::string text = readFile(p.jsonl, kMaxInputFileBytes, "a study output");
+    const std::string source = p.jsonl.string();
     std::vector<nlohmann::ordered_json> out;
-    std::string line;
-    while (std::getline(f, line)) {
-        if (f.eof() && !line.empty() && line.back() != '}') break;  // a line cut by a killed run
+    for (size_t begin = 0; begin < text.size();) {
+        const size_t newline = text.find('\n', begin), end = newline == std::string::npos ? text.size() : newline;
+        const std::string_view line(text.data() + begin, end - begin);
+        begin = end + 1;
+        if (newline == std::string::npos && !line.empty() && line.back() != '}') break;  // cut by a killed run
         try {
-            nlohmann::ordered_json j = nlohmann::ordered_json::parse(line);
-            if (j.is_object() && j.contains("id")) out.push_back(std::move(j));
-        } catch (const nlohmann::json::exception&) {}
+            nlohmann::ordered_json j = parseOrderedJson(line, source, kRecordJson);
+            if (j.is_object() && j.contains("id") && j["id"].is_string()) out.push_back(std::move(j));
+        } catch (const InputError&) {}
     }
     return out;
 }

@@ -60,6 +60,8 @@ struct Spec {
     bool oracle = true;  // measure against the oracle and attribute causes
     // Each axis' name in errors: its spec key, or the command-line option that set it.
     OptionNames names = specOptionNames("study spec");
+    // What errors about the whole sweep name: the spec file it was read from.
+    std::string source = "study spec";
 };
 
 // Reads a JSON spec: {"scenes": [...], "methods": [...], "resolutions": [...], "depths": [...],
@@ -91,8 +93,11 @@ struct RunConfig {
     std::string id() const;
 };
 
-// The product of the spec's axes (validates every value first: InputError). File scenes are
-// opened to count their frames.
+// The most runs a sweep may have: expand refuses a larger one before it makes any.
+inline constexpr uint64_t kMaxStudyRuns = 1'000'000;
+
+// The product of the spec's axes (validates every value first: InputError; also when it has more
+// than kMaxStudyRuns runs). File scenes are opened to count their frames.
 std::vector<RunConfig> expand(const Spec& spec);
 
 // "i/N" with 0 <= i < N: the i-th of N contiguous slices of the sweep (scene-major, so a slice
