@@ -70,8 +70,9 @@ TEST(CliReference, EveryOptionOfEveryCommandIsDocumented) {
         const std::string section = docSection(doc, command);
         ASSERT_FALSE(section.empty()) << "docs/cli.md has no section '## cullide " << command << "'";
         const std::set<std::string> help = helpOptions(helpOf(command));
-        if (command == "prune")  // the parser itself: prune has a dozen options, --method among them
+        if (command == "prune") {  // the parser itself: prune has a dozen options, --method among them
             EXPECT_TRUE(help.count("method")) << "no options parsed from `cullide prune --help`";
+        }
         const std::set<std::string> documented = docOptions(section);
         for (const std::string& o : help)
             EXPECT_TRUE(documented.count(o)) << "docs/cli.md, cullide " << command << ": --" << o
@@ -102,7 +103,9 @@ TEST(CliReference, EverySubcommandIsListed) {
     for (const std::string& parent : {std::string(""), std::string("trace"), std::string("study")}) {
         const std::string help = helpOf(parent);
         const size_t at = help.find("Subcommands:");
-        if (parent != "study") ASSERT_NE(at, std::string::npos) << "cullide " << parent << " --help:\n" << help;
+        if (parent != "study") {
+            ASSERT_NE(at, std::string::npos) << "cullide " << parent << " --help:\n" << help;
+        }
         if (at == std::string::npos) continue;
         std::istringstream lines(help.substr(at));
         for (std::string line; std::getline(lines, line);) {
