@@ -342,7 +342,9 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     std::vector<size_t> order(timed.size());
     for (size_t i = 0; i < order.size(); ++i) order[i] = i;
     std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return timed[a].first < timed[b].first; });
-    const auto& [median, r] = timed[order[order.size() / 2]];
+    // Named without a structured binding: lambdas below use them (clang before 16 cannot capture one).
+    const double median = timed[order[order.size() / 2]].first;
+    const CullideResult& r = timed[order[order.size() / 2]].second;
     size_t rendered = 0, queries = 0;
     for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
 
