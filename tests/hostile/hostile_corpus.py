@@ -309,10 +309,13 @@ for name, f in checks.items():
 sys.exit(1 if bad else 0)
 """
     try:
-        import cullide  # noqa: F401
+        import cullide
     except ImportError:
         return []
-    return [("python", [sys.executable, "-c", code, os.path.join(d, "pair.json")])]
+    # The package as this process found it, also from the corpus folder (PYTHONPATH may be relative).
+    package = os.path.dirname(os.path.dirname(os.path.abspath(cullide.__file__)))
+    return [("python", [sys.executable, "-c", "import sys; sys.path.insert(0, %r)\n" % package + code,
+                        os.path.join(d, "pair.json")])]
 
 
 def run_case(cullide, d, case):
