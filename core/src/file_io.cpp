@@ -133,23 +133,29 @@ std::string readFile(const fs::path& path, uint64_t maxBytes, std::string_view k
     return data;
 }
 
-void writeFileAtomically(const fs::path& path, std::string_view bytes) {
+fs::path temporaryBeside(const fs::path& path) {
     static std::atomic<unsigned> counter{0};
+    fs::path tmp = path;
+    tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+    return tmp;
+}
+
+InputError cannotWrite(const fs::path& path, int err) {
+    // The commonest cause, said plainly: the folder to write into is not there.
+    const fs::path folder = path.parent_path();
+    std::error_code ec;
+    if (!folder.empty() && !fs::exists(folder, ec))
+        return InputError(pathText(path), "folder " + folder.string() + " does not exist");
+    return InputError(pathText(path), std::string("cannot write: ") + std::strerror(err));
+}
+
+void writeFileAtomically(const fs::path& path, std::string_view bytes) {
     const std::string src = pathText(path);
     if (path.native().find('\0') != std::string::npos)
         throw InputError(src, "cannot write: the path contains a NUL byte");
-    fs::path tmp = path;
-    tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+    const fs::path tmp = temporaryBeside(path);
     std::FILE* f = std::fopen(tmp.string().c_str(), "wb");
-    if (!f) {
-        const int openErrno = errno;
-        // The commonest cause, said plainly: the folder to write into is not there.
-        const fs::path folder = path.parent_path();
-        std::error_code ec;
-        if (!folder.empty() && !fs::exists(folder, ec))
-            throw InputError(src, "folder " + folder.string() + " does not exist");
-        throw InputError(src, std::string("cannot write: ") + std::strerror(openErrno));
-    }
+    if (!f) throw cannotWrite(path, errno);
     const bool wrote = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
     const int writeErrno = errno;
     const bool closed = std::fclose(f) == 0;

@@ -3,22 +3,16 @@
 // when they name files, so that no input reads files elsewhere on the machine; generated scenes
 // are only counted, not made). The contract under test: a spec and its runs, or InputError,
 // nothing else. Build and run: see docs/fuzzing.md. Seeds: the specs in docs/studies.md.
+#include "fuzz_util.h"
+
 #include "cullide/error.h"
 #include "cullide/study/study.h"
 
 #include <cstdint>
-#include <cstdio>
-#include <filesystem>
 #include <string>
-#include <unistd.h>
+#include <string_view>
 
 namespace {
-
-const std::filesystem::path& specPath() {
-    static const std::filesystem::path p =
-        std::filesystem::temp_directory_path() / ("cullide_spec_fuzz_" + std::to_string(::getpid()) + ".json");
-    return p;
-}
 
 bool generated(const std::string& scene) {
     for (const char* g : {"bunny:", "cows:", "twist:", "cylinders:"})
@@ -29,12 +23,10 @@ bool generated(const std::string& scene) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-    std::FILE* f = std::fopen(specPath().c_str(), "wb");
-    if (!f) __builtin_trap();
-    std::fwrite(data, 1, size, f);
-    std::fclose(f);
+    const auto& path = cullide::fuzz::writeScratch("spec_fuzz", ".json",
+                                                   std::string_view(reinterpret_cast<const char*>(data), size));
     try {
-        cullide::study::Spec spec = cullide::study::loadSpec(specPath().string());
+        cullide::study::Spec spec = cullide::study::loadSpec(path.string());
         for (std::string& scene : spec.scenes)
             if (!generated(scene)) scene = "bunny:500";
         (void)cullide::study::expand(spec);

@@ -1,6 +1,8 @@
 // Reading input files whole; writing output files all or nothing.
 #pragma once
 
+#include "cullide/error.h"
+
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -34,5 +36,13 @@ std::string readFile(const std::filesystem::path& path, uint64_t maxBytes = kMax
 // Throws InputError(path, cause) when the file cannot be written ("folder F does not exist" when
 // the folder it would go in is missing: folders are never created).
 void writeFileAtomically(const std::filesystem::path& path, std::string_view bytes);
+
+// A fresh name beside `path` for the temporary an all-or-nothing write renames into place:
+// "<path>.tmp.<pid>.<n>", unique per process and call.
+std::filesystem::path temporaryBeside(const std::filesystem::path& path);
+
+// Why `path` cannot be written, from the errno of the failed open or write: "folder F does not
+// exist" when that is why (folders are never created), else "cannot write: <strerror>".
+InputError cannotWrite(const std::filesystem::path& path, int err);
 
 }  // namespace cullide

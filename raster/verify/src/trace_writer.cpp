@@ -7,6 +7,7 @@
 #include "trace_format.h"
 
 #include "cullide/error.h"
+#include "cullide/file_io.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -86,15 +87,6 @@ std::array<uint32_t, 4> encodeCommand(const Command& c) {
     refuseConservative();
 }
 
-// "cannot write: <cause>" for `path`, or, when its folder is missing, that.
-InputError cannotWrite(const std::filesystem::path& path, int err) {
-    const std::filesystem::path folder = path.parent_path();
-    std::error_code ec;
-    if (err == ENOENT && !folder.empty() && !std::filesystem::exists(folder, ec))
-        return InputError(path.string(), "folder " + folder.string() + " does not exist");
-    return InputError(path.string(), std::string("cannot write: ") + std::strerror(err));
-}
-
 }  // namespace
 
 // A file being written for `destination`, in its folder (same file system: the final rename is
@@ -108,9 +100,7 @@ public:
         // Naming an unnamed file needs /proc/self/fd (linkat of its descriptor).
         if (::access("/proc/self/fd", X_OK) == 0) fd_ = ::open(folder.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0666);
         if (fd_ < 0) {  // no O_TMPFILE here, or another problem, which the named open then reports
-            static std::atomic<unsigned> counter{0};
-            named_ = destination_;
-            named_ += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+            named_ = temporaryBeside(destination_);
             fd_ = ::open(named_.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, 0666);
             if (fd_ < 0) throw cannotWrite(destination_, errno);
         }
@@ -140,9 +130,7 @@ public:
         if (std::fflush(file_) != 0) err = errno;
         std::filesystem::path named = named_;
         if (err == 0 && named.empty()) {  // O_TMPFILE: a name beside the destination, then the rename
-            static std::atomic<unsigned> counter{0};
-            named = destination_;
-            named += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+            named = temporaryBeside(destination_);
             const std::string self = "/proc/self/fd/" + std::to_string(fd_);
             if (::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, named.c_str(), AT_SYMLINK_FOLLOW) != 0) err = errno;
             else named_ = named;
