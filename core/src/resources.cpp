@@ -55,4 +55,8 @@ std::filesystem::path dataDir() {
     return resourceDir() / "data";
 }
 
+std::vector<std::filesystem::path> nbodyMeshPaths() {
+    return {dataDir() / "meshes" / "bunny.off", dataDir() / "meshes" / "cow.off"};
+}
+
 }  // namespace cullide

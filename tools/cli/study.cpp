@@ -23,6 +23,7 @@ struct StudyCliOptions {
     std::vector<uint32_t> leafSizes;
     std::vector<int> threads;
     int repeats = 0;  // 0: the spec's
+    double nearDistance = -1;  // < 0: the spec's
     bool noOracle = false;
     std::string shard;
     std::string out = "study.csv";
@@ -42,8 +43,10 @@ struct MergeCliOptions {
 study::Spec buildSpec(const StudyCliOptions& o) {
     study::Spec s;
     if (!o.preset.empty()) {
-        if (o.preset != "paper") throw InputError("option --preset", "'" + o.preset + "': the presets are: paper");
-        s = study::paperPreset(o.repeats > 0 ? o.repeats : 3);
+        const int repeats = o.repeats > 0 ? o.repeats : 3;
+        if (o.preset == "paper") s = study::paperPreset(repeats);
+        else if (o.preset == "deforming") s = study::deformingPreset(repeats);
+        else throw InputError("option --preset", "'" + o.preset + "': the presets are: paper, deforming");
     }
     if (!o.spec.empty()) s = study::loadSpec(o.spec);
     if (!o.scenes.empty()) s.scenes = o.scenes;
@@ -60,7 +63,10 @@ study::Spec buildSpec(const StudyCliOptions& o) {
     if (!o.threads.empty()) s.threads = o.threads;
     if (o.repeats > 0) s.repeats = o.repeats;
     if (o.noOracle) s.oracle = false;
-    if (s.scenes.empty()) throw InputError("study", "no scenes: give a SPEC file, --preset paper or --scenes");
+    if (o.nearDistance >= 0) s.nearDistance = o.nearDistance;
+    if (s.nearDistance > 0 && !s.oracle)
+        throw InputError("option --no-oracle", "near contacts are counted against the oracle (--near-distance)");
+    if (s.scenes.empty()) throw InputError("study", "no scenes: give a SPEC file, --preset paper|deforming or --scenes");
     return s;
 }
 
@@ -113,7 +119,7 @@ void refuseInapplicable(const StudyCliOptions& o, const CLI::App& sub) {
     if (!o.spec.empty()) throw CLI::ValidationError("spec", "a study spec does not apply to --stability");
     for (const char* name :
          {"--preset", "--resolutions", "--views", "--hierarchies", "--leaf-sizes", "--exact-switches", "--backends",
-          "--threads", "--repeats", "--no-oracle", "--shard", "--progress"})
+          "--threads", "--repeats", "--no-oracle", "--near-distance", "--shard", "--progress"})
         refuse(name, "does not apply to --stability");
     if (o.stability != "tilt") refuse("--directions", "applies to --stability tilt only");
     if (o.stability != "jitter") refuse("--scenes", "applies to --stability jitter only");
@@ -174,9 +180,10 @@ void addStudyCommand(CLI::App& app, Action& action) {
         "study", "Sweep configurations over scenes: time, PCS, false prunes by class and cause (docs/studies.md)");
     sub->add_option("spec", o->spec, "Study spec (.json); command-line lists override its fields");
     sub->add_option("--preset", o->preset,
-                    "paper: the seed paper's Section 6 (bunny 5k-270k, two cows 3k-270k, 500x500, D24, modified)");
+                    "paper: the seed paper's Section 6 (bunny 5k-270k, two cows 3k-270k, 500x500, D24, modified); "
+                    "deforming: cloth 10k-92k and N-body 10k-146k, original, modified and reliable, with near contacts");
     sub->add_option("--scenes", o->scenes,
-                    "Scenes: bunny:N, cows:N, twist:N, cylinders:N[:C], or files (FILE@K: frame K)");
+                    "Scenes: bunny:N, cows:N, twist:N, cylinders:N[:C], cloth:N, nbody:N, or files (FILE@K: frame K)");
     sub->add_option("--methods", o->methods, "Methods (as prune --method)");
     sub->add_option("--resolutions", o->resolutions, "Viewports: N or WxH, or auto / auto:K (adaptive)");
     sub->add_option("--depths", o->depths, "Depth formats: 8..32 or float");
@@ -193,6 +200,10 @@ void addStudyCommand(CLI::App& app, Action& action) {
     addNumbers(sub, "--threads", o->threads, "Worker threads per run (0: all cores)", 0, kMaxThreads);
     addNumber(sub, "--repeats", o->repeats, "Timed runs per configuration (median, min, max)", 1, 1000);
     sub->add_flag("--no-oracle", o->noOracle, "Time only: no oracle, no false prunes");
+    addNumber(sub, "--near-distance", o->nearDistance,
+              "Count near contacts (pairs this close that do not intersect) per scene and frame, the distance as a "
+              "fraction of the scene's bounding-box diagonal (0: not counted, the default; at most 0.1)",
+              0.0, study::kMaxNearDistance);
     sub->add_option("--shard", o->shard,
                     "Run only slice i of N (i/N, 0-based; e.g. $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT)");
     sub->add_option("-o,--out", o->out,

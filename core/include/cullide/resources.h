@@ -13,12 +13,16 @@
 #pragma once
 
 #include <filesystem>
+#include <vector>
 
 namespace cullide {
 
 std::filesystem::path resourceDir();
 // resourceDir() / "data": bunny.off, cow.off, bunny75k.off in meshes/; scenes/.
 std::filesystem::path dataDir();
+// The source meshes of the N-body scene when none is given (make-scene nbody, the study's
+// nbody:N): dataDir() / "meshes" / bunny.off and cow.off.
+std::vector<std::filesystem::path> nbodyMeshPaths();
 // Overrides the resource root for this process (empty: back to the rules above). Not thread-safe
 // against concurrent resourceDir() calls: call it once at start-up.
 void setResourceDir(const std::filesystem::path& dir);

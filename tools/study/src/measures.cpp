@@ -185,4 +185,13 @@ PcsReport measurePcs(const Scene& scene, const Truth& truth, std::span<const Pcs
     return r;
 }
 
+NearMeasure measureNear(const Scene& scene, const oracle::Truth& truth, double fraction) {
+    Bounds box;
+    for (size_t i = 0; i < scene.objects.size(); ++i) box.add(referencedBounds(scene.worldMesh(i)));
+    NearMeasure m;
+    m.distance = box.empty() ? 0.0 : fraction * box.extent().cast<double>().norm();
+    m.contacts = oracle::countNearContacts(scene, truth, m.distance);
+    return m;
+}
+
 }  // namespace cullide::study

@@ -7,6 +7,7 @@
 #include "cullide/hierarchy.h"
 #include "cullide/json_read.h"
 #include "cullide/options.h"
+#include "cullide/parse_number.h"
 #include "cullide/raster/backends.h"
 
 #include <algorithm>
@@ -47,6 +48,13 @@ public:
         if (v.is_number_unsigned() ? v.get<uint64_t>() > uint64_t(hi) : v.get<int64_t>() < lo || v.get<int64_t>() > hi)
             fail(key, range + ", not " + v.dump());
         return v.is_number_unsigned() ? int64_t(v.get<uint64_t>()) : v.get<int64_t>();
+    }
+
+    // A JSON number in [lo, hi] (NaN cannot be written in JSON; "0.1" and true are refused).
+    double real(const Json& v, const std::string& key, double lo, double hi) const {
+        if (!v.is_number() || v.get<double>() < lo || v.get<double>() > hi)
+            fail(key, "expected a number from " + numberText(lo) + " to " + numberText(hi) + ", not " + v.dump());
+        return v.get<double>();
     }
 
     std::string text(const Json& v, const std::string& key) const {
@@ -140,6 +148,8 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
             s.seed = x.get<uint64_t>();
         } else if (key == "repeats") {
             s.repeats = int(r.integer(r.single(v, key), key, 1, 1000));
+        } else if (key == "near_distance") {
+            s.nearDistance = r.real(r.single(v, key), key, 0, kMaxNearDistance);
         } else if (key == "oracle") {
             if (!v.is_boolean()) r.fail(key, "true or false, not " + v.dump());
             s.oracle = v.get<bool>();
@@ -147,7 +157,7 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
             throw InputError(source,
                              "unknown field '" + key +
                                  "' (fields: scenes, methods, resolutions, depths, directions, views, hierarchies, "
-                                 "leaf_sizes, exact_switches, backends, threads, branching, seed, repeats, oracle)");
+                                 "leaf_sizes, exact_switches, backends, threads, branching, seed, repeats, near_distance, oracle)");
         }
     }
     return s;

@@ -6,11 +6,13 @@
 #include "cullide/pipeline/progress.h"
 #include "cullide/pipeline/pruner.h"
 
+#include "cullide/cloth.h"
 #include "cullide/error.h"
 #include "cullide/file_io.h"
 #include "cullide/generators.h"
 #include "cullide/json_read.h"
 #include "cullide/mesh_io.h"
+#include "cullide/nbody.h"
 #include "cullide/parallel.h"
 #include "cullide/parse_number.h"
 #include "cullide/provenance.h"
@@ -65,7 +67,8 @@ size_t parseCount(const std::string& text, const std::string& scene) {
 
 bool isGenerated(const std::string& text) {
     const std::string head = splitColon(text)[0];
-    return head == "bunny" || head == "cows" || head == "cylinders" || head == "twist";
+    return head == "bunny" || head == "cows" || head == "cylinders" || head == "twist" || head == "cloth" ||
+           head == "nbody";
 }
 
 // The file part of "path@K" and the frame selector ("" when none).
@@ -121,12 +124,25 @@ Spec paperPreset(int repeats) {
     return s;
 }
 
+Spec deformingPreset(int repeats) {
+    Spec s;
+    // From 10k to the sizes of the field's sequences (cloth on a ball 92k, N-body 146k).
+    s.scenes = {"cloth:10000", "cloth:30000", "cloth:92000", "nbody:10000", "nbody:50000", "nbody:146000"};
+    s.methods = {"original", "modified", "reliable"};
+    s.resolutions = {"500"};
+    s.depths = {"24"};
+    s.nearDistance = kDeformingNearDistance;
+    s.repeats = repeats;
+    return s;
+}
+
 std::string RunConfig::key() const {
     std::ostringstream k;
     k << scene << '|' << frame << '|' << method << '|' << resolution << '|' << depth << '|' << directions << '|'
       << hierarchy << '|' << leafSize << '|' << branching << '|' << seed << '|' << backend << '|' << threads;
     if (views != "fit") k << "|views=" << views;
     if (exactSwitch != "never") k << "|exact=" << exactSwitch;  // the defaults keep the ids they always had
+    if (nearDistance > 0) k << "|near=" << numberText(nearDistance);
     return k.str();
 }
 
@@ -149,7 +165,7 @@ struct Generated {
 Generated parseGenerated(const std::string& text) {
     const std::vector<std::string> parts = splitColon(text);
     if (parts.size() < 2 || parts.size() > 3 || (parts.size() == 3 && parts[0] != "cylinders"))
-        throw InputError("scene '" + text + "'", "expected bunny:N, cows:N, twist:N or cylinders:N[:C]");
+        throw InputError("scene '" + text + "'", "expected bunny:N, cows:N, twist:N, cylinders:N[:C], cloth:N or nbody:N");
     Generated g;
     g.kind = parts[0];
     g.request.triangles = parseCount(parts[1], text);
@@ -172,6 +188,12 @@ Scene loadStudyScene(const std::string& text, uint32_t frame) {
         if (g.kind == "cows") return makeTwoCows(loadMesh(dataDir() + "/meshes/cow.off"), r).scene;
         if (g.kind == "twist")
             return makeTwistAnimation(resample(loadMesh(dataDir() + "/meshes/bunny.off"), r.triangles), r).scene;
+        if (g.kind == "cloth") return makeCloth({.triangles = r.triangles, .frames = 1}).sceneAt(0);  // draped
+        if (g.kind == "nbody") {
+            std::vector<Mesh> meshes;
+            for (const auto& path : nbodyMeshPaths()) meshes.push_back(loadMesh(path));
+            return makeNBody(meshes, {.triangles = r.triangles, .frames = 1}).sceneAt(0);  // time 0
+        }
         return makeCylinders(g.cylinders, r).scene;
     }
     const Animation a = loadScene(splitFrame(text).first);
@@ -215,7 +237,7 @@ void appendCombinations(const Spec& spec, const std::string& scene, uint32_t fra
         c.depth = spec.depths[i[2]], c.directions = spec.directions[i[3]], c.views = spec.views[i[4]];
         c.hierarchy = spec.hierarchies[i[5]], c.leafSize = spec.leafSizes[i[6]], c.exactSwitch = spec.exactSwitches[i[7]];
         c.backend = spec.backends[i[8]], c.threads = spec.threads[i[9]];
-        c.branching = spec.branching, c.seed = spec.seed;
+        c.branching = spec.branching, c.seed = spec.seed, c.nearDistance = spec.nearDistance;
         out.push_back(c);
         size_t k = kAxes;
         while (k > 0 && ++i[k - 1] == sizes[k - 1]) i[--k] = 0;
@@ -235,6 +257,11 @@ std::vector<RunConfig> expand(const Spec& spec) {
     nonEmpty(spec.directions, "directions"), nonEmpty(spec.hierarchies, "hierarchies"), nonEmpty(spec.views, "views");
     nonEmpty(spec.leafSizes, "leaf sizes"), nonEmpty(spec.backends, "backends"), nonEmpty(spec.threads, "threads");
     nonEmpty(spec.exactSwitches, "exact switches");
+    if (!(spec.nearDistance >= 0 && spec.nearDistance <= kMaxNearDistance))
+        throw InputError("study spec", "near distance " + numberText(spec.nearDistance) + " is out of range (0 to " +
+                                           numberText(kMaxNearDistance) + ")");
+    if (spec.nearDistance > 0 && !spec.oracle)
+        throw InputError("study spec", "near contacts are counted against the oracle: a near distance needs it");
     for (const std::string& b : spec.backends)
         if (!raster::isBackendName(b))
             throw InputError("study spec", "backend '" + b + "': " + raster::backendNameList());
@@ -495,6 +522,7 @@ const std::vector<std::string>& columns() {
     static const std::vector<std::string> all = [] {
         std::vector<std::string> v = c;
         for (const char* k : {"exact_switch", "switched_at_level", "exact_ms", "time_to_exact_ms"}) v.push_back(k);
+        for (const char* k : {"near_distance", "near_contacts", "near_contacts_self"}) v.push_back(k);
         return v;
     }();
     return all;
@@ -579,6 +607,17 @@ void append(std::ofstream& out, const std::filesystem::path& path, const std::st
 
 }  // namespace
 
+namespace {
+
+// The scene's near contacts into a record (null: not counted; the columns stay empty).
+void addNear(nlohmann::ordered_json& r, const NearMeasure* near) {
+    r["near_distance"] = near ? nlohmann::ordered_json(near->distance) : nullptr;
+    r["near_contacts"] = near ? nlohmann::ordered_json(near->contacts.total()) : nullptr;
+    r["near_contacts_self"] = near ? nlohmann::ordered_json(near->contacts.selfPairs) : nullptr;
+}
+
+}  // namespace
+
 size_t runStudy(const StudyOptions& opt) {
     const OutputPaths paths = outputPaths(opt.out);
     const std::vector<RunConfig> mine = slice(expand(opt.spec), opt.shard);
@@ -602,6 +641,7 @@ size_t runStudy(const StudyOptions& opt) {
     std::string sceneKey;
     Scene scene;
     std::unique_ptr<oracle::Truth> truth;
+    NearMeasure near;
     std::map<std::pair<std::string, int>, std::unique_ptr<DepthBackend>> backends;
     Progress bar("study", todo.size(), "runs", opt.progress);
     for (size_t i = 0; i < todo.size(); ++i) {
@@ -613,11 +653,13 @@ size_t runStudy(const StudyOptions& opt) {
             scene = loadStudyScene(c.scene, c.frame);
             truth.reset();
             if (opt.spec.oracle) truth = std::make_unique<oracle::Truth>(oracle::findIntersections(scene));
+            if (truth && opt.spec.nearDistance > 0) near = measureNear(scene, *truth, opt.spec.nearDistance);
             sceneKey = key;
         }
         auto& backend = backends[{c.backend, c.threads}];
         if (!backend) backend = raster::makeBackend(c.backend, c.threads);
         nlohmann::ordered_json r = runOne(c, scene, truth.get(), opt.spec.repeats, *backend);
+        addNear(r, truth && opt.spec.nearDistance > 0 ? &near : nullptr);
         if (!opt.command.empty()) r["command"] = opt.command;
         append(csv, paths.csv, csvRow(r));
         append(jsonl, paths.jsonl, r.dump() + "\n");

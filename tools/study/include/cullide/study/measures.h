@@ -28,6 +28,7 @@
 #pragma once
 
 #include "cullide/cullide.h"
+#include "cullide/oracle/near_contacts.h"
 #include "cullide/oracle/oracle.h"
 
 #include <span>
@@ -66,5 +67,13 @@ struct PcsReport {
 // `truth` (findIntersections of the same scene), with the options of the run that produced it.
 PcsReport measurePcs(const Scene& scene, const oracle::Truth& truth, std::span<const PcsTriangle> pcs,
                      const CullideOptions& options);
+
+// The near contacts of a scene (cullide/oracle/near_contacts.h) within `fraction` of the diagonal
+// of its world bounding box (`distance`, world units); `truth` is the oracle's for the scene.
+struct NearMeasure {
+    double distance = 0;
+    oracle::NearContacts contacts;
+};
+NearMeasure measureNear(const Scene& scene, const oracle::Truth& truth, double fraction);
 
 }  // namespace cullide::study

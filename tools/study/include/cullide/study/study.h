@@ -10,7 +10,8 @@
 //     "never", so that the ids of studies from before those axes stay): stable across processes,
 //     shards and machines; resuming and merging key on it. Repeats are not part of the key.
 //   - Scenes: "bunny:N" (the deformed bunny, make-scene bunny), "cows:N" (two cows), "cylinders:N"
-//     or "cylinders:N:C", "twist:N" (a twisted bunny); or a scene/mesh file; "@K" picks frame K
+//     or "cylinders:N:C", "twist:N" (a twisted bunny), "cloth:N" (the draped cloth, the last state
+//     of make-scene cloth), "nbody:N" (make-scene nbody at time 0); or a scene/mesh file; "@K" picks frame K
 //     of a file's animation, "@all" (the default for files) every frame.
 //   - Records are flat JSON objects (plus a "passes" array of per-call stats, a "provenance"
 //     object, cullide/provenance.h, and the "command" that ran the sweep, when known); the CSV
@@ -58,6 +59,9 @@ struct Spec {
     uint64_t seed = 1;
     int repeats = 3;  // timed runs per configuration (median, min, max)
     bool oracle = true;  // measure against the oracle and attribute causes
+    // Near contacts (cullide/oracle/near_contacts.h) are counted per scene and frame within this
+    // fraction of the scene's bounding-box diagonal; 0: not counted (needs the oracle).
+    double nearDistance = 0;
     // Each axis' name in errors: its spec key, or the command-line option that set it.
     OptionNames names = specOptionNames("study spec");
     // What errors about the whole sweep name: the spec file it was read from.
@@ -67,7 +71,7 @@ struct Spec {
 // Reads a JSON spec: {"scenes": [...], "methods": [...], "resolutions": [...], "depths": [...],
 // "directions": [...], "views": [...], "hierarchies": [...], "leaf_sizes": [...], "exact_switches": [...],
 // "backends": [...],
-// "threads": [...], "branching": B, "seed": S, "repeats": K, "oracle": true}. Scalars are accepted
+// "threads": [...], "branching": B, "seed": S, "repeats": K, "near_distance": F, "oracle": true}. Scalars are accepted
 // where lists are expected, and a list of one where a scalar is. Every field is checked here,
 // before anything runs: an unknown key, an empty list, a wrong type or a value out of range is an
 // InputError(source, "field 'KEY': ...") (spec.cpp).
@@ -76,6 +80,11 @@ Spec loadSpec(const std::string& path);
 // The paper's Section 6 experiments (docs/paper.md#section-6): bunny 5k..270k, two cows 3k..270k, 500x500, D24,
 // modified, axes, connectivity leaf 16; `repeats` timed runs each.
 Spec paperPreset(int repeats = 3);
+// The field's deforming scenes (docs/scenes.md): cloth:10000, 30000, 92000 and nbody:10000, 50000,
+// 146000 (their draped and first states), original, modified and reliable at 500x500, D24, near
+// contacts within kDeformingNearDistance of the diagonal.
+Spec deformingPreset(int repeats = 3);
+inline constexpr double kDeformingNearDistance = 0.001;
 
 struct RunConfig {
     size_t index = 0;
@@ -85,6 +94,7 @@ struct RunConfig {
     std::string views = "fit";
     uint32_t leafSize = 16, branching = 4;
     uint64_t seed = 1;
+    double nearDistance = 0;  // the spec's: part of the key when not 0
     std::string exactSwitch = "never";
     std::string backend;
     int threads = 0;
@@ -92,6 +102,10 @@ struct RunConfig {
     std::string key() const;
     std::string id() const;
 };
+
+// The largest near distance a spec may ask for: a tenth of the scene's diagonal already makes
+// most pairs of a compact scene near contacts.
+inline constexpr double kMaxNearDistance = 0.1;
 
 // The most runs a sweep may have: expand refuses a larger one before it makes any.
 inline constexpr uint64_t kMaxStudyRuns = 1'000'000;
