@@ -431,6 +431,51 @@ TEST(Study, ExactSwitchAxis) {
     }
 }
 
+// Trap: near contacts counted when not asked for (every study would pay for them), or a near
+// distance that does not change the run's id (a resumed study would mix two distances). cows:800
+// (two crossing copies in one object) has near contacts, more at a larger distance; a bad
+// distance, or one without the oracle, is refused.
+TEST(Study, NearContactsAreCountedWhenAsked) {
+    Spec s;
+    s.scenes = {"cows:800"};
+    s.resolutions = {"64"};
+    s.repeats = 1;
+    const RunConfig plain = expand(s)[0];
+    s.nearDistance = 0.002;
+    const RunConfig nearer = expand(s)[0];
+    EXPECT_EQ(nearer.key(), plain.key() + "|near=0.002");
+    test::TempDir dir;
+    StudyOptions o;
+    o.spec = s;
+    o.out = dir / "near.csv";
+    runStudy(o);
+    o.spec.nearDistance = 0.02;
+    runStudy(o);  // another id: a second record, not a resumed one
+    s.nearDistance = 0;
+    o.spec = s;
+    runStudy(o);
+    const auto records = readRecords(o.out);
+    ASSERT_EQ(records.size(), 3u);
+    EXPECT_GT(records[0]["near_contacts"].get<size_t>(), 0u);
+    EXPECT_GT(records[1]["near_contacts"].get<size_t>(), records[0]["near_contacts"].get<size_t>());
+    EXPECT_EQ(records[1]["near_contacts_self"], records[1]["near_contacts"]);  // one object
+    EXPECT_NEAR(records[1]["near_distance"].get<double>() / records[0]["near_distance"].get<double>(), 10.0, 1e-9);
+    EXPECT_TRUE(records[2]["near_contacts"].is_null());
+    for (const char* bad : {R"({"scenes": "cows:800", "near_distance": -0.1})",
+                            R"({"scenes": "cows:800", "near_distance": 0.5})",
+                            R"({"scenes": "cows:800", "near_distance": "0.01"})"}) {
+        try {
+            (void)parseSpec(nlohmann::json::parse(bad), "spec.json");
+            ADD_FAILURE() << "accepted " << bad;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("field 'near_distance'"), std::string::npos) << e.what();
+        }
+    }
+    Spec blind = parseSpec(nlohmann::json::parse(R"({"scenes": "cows:800", "near_distance": 0.01})"), "spec.json");
+    blind.oracle = false;
+    EXPECT_THROW((void)expand(blind), InputError);
+}
+
 // Trap: a study output of which one file could not be written leaving the other behind (a CSV
 // with its header only and no records): the CSV and its JSON lines appear together or not at all.
 TEST(Study, OutputsAreWrittenTogetherOrNotAtAll) {

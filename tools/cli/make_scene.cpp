@@ -119,13 +119,12 @@ void setSequenceDefaults(MakeSceneOptions& o, const CLI::App& sub) {
     if (!sub.count("--count")) o.count = NBodyRequest{}.count;
     const size_t maxFrames = cloth ? kMaxClothFrames : kMaxNBodyFrames;
     if (o.frames < 1 || o.frames > maxFrames)
-        throw CLI::ValidationError("--frames", std::to_string(o.frames) + " is out of range for '" +
-                                                   (cloth ? "cloth" : "nbody") + "' (1 to " +
-                                                   std::to_string(maxFrames) + ")");
+        throw InputError("option --frames", std::to_string(o.frames) + " is out of range for '" +
+                                                (cloth ? "cloth" : "nbody") + "' (1 to " + std::to_string(maxFrames) +
+                                                ")");
     if (cloth && o.triangles > kMaxClothTriangles)
-        throw CLI::ValidationError("--triangles", std::to_string(o.triangles) +
-                                                      " is out of range for 'cloth' (100 to " +
-                                                      std::to_string(kMaxClothTriangles) + ")");
+        throw InputError("option --triangles", std::to_string(o.triangles) + " is out of range for 'cloth' (100 to " +
+                                                   std::to_string(kMaxClothTriangles) + ")");
 }
 
 }  // namespace

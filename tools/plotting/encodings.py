@@ -17,7 +17,8 @@ MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*", "<", ">", "h", "p"]
 # The axes of a configuration, in the sweep's order (cullide/study/study.h), scene and frame apart.
 AXES = ["method", "resolution", "depth", "directions", "views", "hierarchy", "leaf_size", "exact_switch", "backend",
         "threads"]
-GENERATORS = {"bunny": "bunny", "cows": "two cows", "twist": "twisted bunny", "cylinders": "cylinders"}
+GENERATORS = {"bunny": "bunny", "cows": "two cows", "twist": "twisted bunny", "cylinders": "cylinders",
+              "cloth": "cloth", "nbody": "N-body"}
 METHOD = {"name": "modified", "chosen": False}  # the per-call charts' method (--method)
 
 

@@ -22,7 +22,7 @@ STUDY_MAYBE_EMPTY = (["oracle_pairs", "oracle_crossing", "oracle_touching", "col
                       "fp_crossing", "fp_touching"] + ["fp_" + c for c in CAUSES] +
                      ["missed_pairs", "mp_crossing", "mp_touching"] + ["mp_" + c for c in CAUSES] +
                      ["false_positives", "efficiency", "attribution_ms", "switched_at_level", "exact_ms",
-                      "time_to_exact_ms"])
+                      "time_to_exact_ms", "near_distance", "near_contacts", "near_contacts_self"])
 PASS_NUMBERS = ["seconds", "triangles_in", "triangles_out", "triangles_rendered"]
 PASS_OPTIONAL = ["width", "height", "tiles", "views"]
 # Stability sweeps: each sweep's columns (text, then numbers), and the numbers any of them has

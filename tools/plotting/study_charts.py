@@ -7,6 +7,7 @@ from .encodings import (CAUSES, MARKERS, common_text, config_text, grid, legend_
 from .load import num
 from .output import plt, save
 from .paper_figures import figure8, per_call_charts
+from .sequence_charts import frames_chart
 
 
 def speed_vs_accuracy(rows, out):
@@ -126,6 +127,6 @@ def causes_chart(rows, out):
 
 
 def plot_study_rows(rows, out):
-    made = [speed_vs_accuracy(rows, out), figure8(rows, out), causes_chart(rows, out)]
+    made = [speed_vs_accuracy(rows, out), figure8(rows, out), causes_chart(rows, out), frames_chart(rows, out)]
     made += per_call_charts(rows, out)
     return [m for m in made if m]
