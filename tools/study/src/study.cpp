@@ -192,7 +192,9 @@ Scene loadStudyScene(const std::string& text, uint32_t frame) {
         if (g.kind == "nbody") {
             std::vector<Mesh> meshes;
             for (const auto& path : nbodyMeshPaths()) meshes.push_back(loadMesh(path));
-            return makeNBody(meshes, {.triangles = r.triangles, .frames = 1}).sceneAt(0);  // time 0
+            // make-scene's 100 bodies; fewer where N leaves a body under the minimum of triangles.
+            const size_t count = std::min(NBodyRequest{}.count, std::max<size_t>(1, r.triangles / kMinNBodyTrianglesPerBody));
+            return makeNBody(meshes, {.count = count, .triangles = r.triangles, .frames = 1}).sceneAt(0);  // time 0
         }
         return makeCylinders(g.cylinders, r).scene;
     }
