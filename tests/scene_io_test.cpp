@@ -345,6 +345,30 @@ TEST(SceneIo, PositionsFilesGiveTheFrames) {
     EXPECT_EQ(applyTransform(s1.objects[0].transform, s1.objects[0].mesh.positions[4]), Vec3f(4, 1, 5));
 }
 
+// Trap: an animation built in code whose positions files cannot be what it says (for an object
+// it does not have, two for one object, frames from a file in a still scene, an object given
+// positions by a frame and by its file): refused by validateAnimation, so writeScene and the
+// Python module refuse it too, instead of sceneAt choosing one.
+TEST(SceneIo, PositionsFileRefsAreChecked) {
+    Animation a;
+    a.scene = test::sceneOf({{test::box({0, 0, 0}, {1, 1, 1}), Transform::Identity()}});
+    a.positionsFiles = {{0, "a.pos"}};
+    EXPECT_EQ(errorOf([&] { validateAnimation(a, "s"); }),
+              "s: object 'o0' has a positions file, but the animation has no frames");
+    a.frames.resize(2);
+    EXPECT_EQ(errorOf([&] { validateAnimation(a, "s"); }), "");
+    a.positionsFiles.push_back({0, "b.pos"});
+    EXPECT_EQ(errorOf([&] { validateAnimation(a, "s"); }), "s: object 'o0' has two positions files");
+    a.positionsFiles = {{1, "a.pos"}};
+    EXPECT_EQ(errorOf([&] { validateAnimation(a, "s"); }),
+              "s: a positions file (a.pos) is for object 1, but the scene has 1 objects");
+    a.positionsFiles = {{0, "a.pos"}};
+    a.frames[1].poses.resize(1);
+    a.frames[1].poses[0].positions = a.scene.objects[0].mesh.positions;
+    EXPECT_EQ(errorOf([&] { validateAnimation(a, "s"); }),
+              "s: frame 1, object 'o0': positions given both by the frame and by the object's positions file");
+}
+
 // Trap: writeScene writing a file per frame again, storing frames that leave an object's
 // positions as something else than the base positions, or giving other bytes for the same
 // animation: one positions file per deforming object with every frame, frames kept only for their

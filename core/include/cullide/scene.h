@@ -95,7 +95,7 @@ struct PositionsFileRef {
 struct Animation {
     Scene scene;  // the base scene (frame-independent data: names, triangles)
     std::vector<Frame> frames;  // may be empty: a still scene
-    std::vector<PositionsFileRef> positionsFiles;  // at most one per object, in object order
+    std::vector<PositionsFileRef> positionsFiles;  // at most one per object (loadScene: in object order)
 
     size_t frameCount() const { return frames.empty() ? 1 : frames.size(); }
     // The scene as it is at frame f (f < frameCount()). Throws InputError(file, ...) when a
