@@ -2,6 +2,7 @@
 
 #include "cullide/error.h"
 #include "cullide/mesh_io.h"
+#include "cullide/positions_file.h"
 
 #include <cmath>
 #include <cstdio>
@@ -173,24 +174,45 @@ void checkPosePositions(std::span<const Vec3f> positions, const Object& object, 
                                          " is not finite (NaN or Inf)");
 }
 
+const PositionsFileRef* Animation::positionsFileOf(size_t i) const {
+    for (const PositionsFileRef& r : positionsFiles)
+        if (r.object == i) return &r;
+    return nullptr;
+}
+
+std::optional<std::vector<Vec3f>> Animation::framePositions(size_t f, size_t i) const {
+    CULLIDE_CHECK(f < frameCount() && i < scene.objects.size(), "frame or object index out of range");
+    if (frames.empty()) return std::nullopt;
+    const Object& o = scene.objects[i];
+    const ObjectPose* pose = i < frames[f].poses.size() ? &frames[f].poses[i] : nullptr;
+    if (pose && pose->positions) return pose->positions;
+    std::vector<Vec3f> positions;
+    std::string source;
+    if (const PositionsFileRef* ref = positionsFileOf(i)) {
+        const PositionsFile file(ref->path);
+        file.readFrame(f, positions);
+        source = file.source();
+    } else if (pose && !pose->positionsFile.empty()) {
+        positions = loadMesh(pose->positionsFile).positions;
+        source = pose->positionsFile;
+    } else {
+        return std::nullopt;
+    }
+    const std::string where = "frame " + std::to_string(f);
+    checkPosePositions(positions, o, source, where);
+    checkWorldPositions(positions, pose && pose->transform ? *pose->transform : o.transform, o.name, source, where);
+    return positions;
+}
+
 Scene Animation::sceneAt(size_t f) const {
     CULLIDE_CHECK(f < frameCount(), "frame index out of range");
     Scene s = scene;
     if (frames.empty()) return s;
     const Frame& fr = frames[f];
-    for (size_t i = 0; i < fr.poses.size() && i < s.objects.size(); ++i) {
+    for (size_t i = 0; i < fr.poses.size() && i < s.objects.size(); ++i)
         if (fr.poses[i].transform) s.objects[i].transform = *fr.poses[i].transform;
-        if (fr.poses[i].positions) {
-            s.objects[i].mesh.positions = *fr.poses[i].positions;
-        } else if (!fr.poses[i].positionsFile.empty()) {
-            const std::string& file = fr.poses[i].positionsFile;
-            std::vector<Vec3f> positions = loadMesh(file).positions;
-            const std::string where = "frame " + std::to_string(f);
-            checkPosePositions(positions, s.objects[i], file, where);
-            checkWorldPositions(positions, s.objects[i].transform, s.objects[i].name, file, where);
-            s.objects[i].mesh.positions = std::move(positions);
-        }
-    }
+    for (size_t i = 0; i < s.objects.size(); ++i)
+        if (std::optional<std::vector<Vec3f>> p = framePositions(f, i)) s.objects[i].mesh.positions = std::move(*p);
     return s;
 }
 
@@ -198,8 +220,33 @@ static bool finite(const Transform& t) {
     return t.matrix().allFinite();
 }
 
+// The objects that a.positionsFiles gives positions (true at their index), after checking its
+// entries against the scene and the frames.
+static std::vector<bool> checkPositionsFiles(const Animation& a, const std::string& source) {
+    std::vector<bool> tracked(a.scene.objects.size(), false);
+    for (const PositionsFileRef& r : a.positionsFiles) {
+        if (r.object >= a.scene.objects.size())
+            throw InputError(source, "a positions file (" + r.path + ") is for object " + std::to_string(r.object) +
+                                         ", but the scene has " + std::to_string(a.scene.objects.size()) + " objects");
+        const std::string& name = a.scene.objects[r.object].name;
+        if (tracked[r.object]) throw InputError(source, "object '" + name + "' has two positions files");
+        if (a.frames.empty())
+            throw InputError(source, "object '" + name + "' has a positions file, but the animation has no frames");
+        tracked[r.object] = true;
+    }
+    for (size_t f = 0; f < a.frames.size(); ++f)
+        for (size_t i = 0; i < a.frames[f].poses.size() && i < tracked.size(); ++i) {
+            const ObjectPose& p = a.frames[f].poses[i];
+            if (tracked[i] && (p.positions || !p.positionsFile.empty()))
+                throw InputError(source, "frame " + std::to_string(f) + ", object '" + a.scene.objects[i].name +
+                                             "': positions given both by the frame and by the object's positions file");
+        }
+    return tracked;
+}
+
 void validateAnimation(const Animation& a, const std::string& source) {
     checkSceneObjects(a.scene, source);
+    const std::vector<bool> tracked = checkPositionsFiles(a, source);
     std::vector<Eigen::Vector3d> magnitudes;  // per object, of its base positions
     magnitudes.reserve(a.scene.objects.size());
     for (size_t i = 0; i < a.scene.objects.size(); ++i) {
@@ -223,7 +270,7 @@ void validateAnimation(const Animation& a, const std::string& source) {
             if (p.positions) checkPosePositions(*p.positions, o, source, where);
             const Transform& t = p.transform ? *p.transform : o.transform;
             if (p.positions) checkWorldPositions(*p.positions, t, o.name, source, where);
-            else if (p.transform && p.positionsFile.empty())
+            else if (p.transform && p.positionsFile.empty() && !tracked[i])
                 checkWorld(o.mesh.positions, magnitudes[i], t, o.name, source, where);
         }
     }

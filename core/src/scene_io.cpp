@@ -5,21 +5,28 @@
 // translate), evaluated in double and rounded once to float. JSON is read by readJsonFile
 // (json_read.h: duplicate keys, nesting and size bounded).
 // Writing is deterministic: keys in a fixed order, numbers as the shortest decimal that reads
-// back to the same double (every float is exactly a double), meshes as OFF (writeOff).
+// back to the same double (every float is exactly a double), meshes as OFF (writeOff), a
+// deforming object's frames as one positions file (positions_file.h).
 #include "cullide/scene_io.h"
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
 #include "cullide/json_read.h"
 #include "cullide/mesh_io.h"
+#include "cullide/positions_file.h"
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <set>
+#include <span>
 
 namespace cullide {
 namespace {
@@ -60,14 +67,7 @@ public:
             if (o.contains("transform")) obj.transform = parseTransform(o["transform"], where + ".transform");
             a.scene.objects.push_back(std::move(obj));
         }
-        if (root.contains("animation")) {
-            const Json& anim = root["animation"];
-            requireObject(anim, "'animation'");
-            allowKeys(anim, "'animation'", {"frames"});
-            const Json& frames = requireKey(anim, "frames", "'animation'");
-            if (!frames.is_array()) fail("animation.frames: expected an array, got " + typeName(frames));
-            for (size_t f = 0; f < frames.size(); ++f) a.frames.push_back(parseFrame(frames[f], f, a.scene, byName));
-        }
+        if (root.contains("animation")) parseAnimation(root["animation"], a, byName);
         validateAnimation(a, src_);
         return a;
     }
@@ -178,6 +178,59 @@ private:
         }
     }
 
+    // The frames, and the positions files that give deforming objects every frame: their frame
+    // count is the animation's when `frames` is absent, and must be frames' when it is given.
+    void parseAnimation(const Json& anim, Animation& a, const std::map<std::string, size_t>& byName) const {
+        requireObject(anim, "'animation'");
+        allowKeys(anim, "'animation'", {"positions", "frames"});
+        const uint64_t fileFrames = anim.contains("positions") ? parsePositionsFiles(anim["positions"], a, byName) : 0;
+        if (!anim.contains("frames")) {
+            if (fileFrames == 0) (void)requireKey(anim, "frames", "'animation'");
+            a.frames.resize(size_t(fileFrames));
+            return;
+        }
+        const Json& frames = anim["frames"];
+        if (!frames.is_array()) fail("animation.frames: expected an array, got " + typeName(frames));
+        if (fileFrames != 0 && fileFrames != frames.size())
+            fail("animation.positions: the positions files have " + std::to_string(fileFrames) +
+                 " frames, but animation.frames has " + std::to_string(frames.size()) + " (wrong frame count)");
+        for (size_t f = 0; f < frames.size(); ++f) a.frames.push_back(parseFrame(frames[f], f, a.scene, byName));
+    }
+
+    // animation.positions: object name -> positions file, each checked now (header, size, vertex
+    // count, frame count) and its frames when sceneAt reads them. Returns their frame count (0:
+    // none given).
+    uint64_t parsePositionsFiles(const Json& j, Animation& a, const std::map<std::string, size_t>& byName) const {
+        requireObject(j, "animation.positions");
+        uint64_t frames = 0;
+        std::string first;
+        for (const auto& [name, ref] : j.items()) {
+            const std::string where = "animation.positions." + name;
+            const auto it = byName.find(name);
+            if (it == byName.end()) fail(where + ": unknown object '" + name + "' (not in 'objects')");
+            const std::string file = requireString(ref, where);
+            const fs::path path = referencedPath(file);
+            PositionsHeader h;
+            try {
+                h = PositionsFile(path).header();
+            } catch (const InputError& e) {
+                fail(where + ": " + e.what());
+            }
+            const size_t vertices = a.scene.objects[it->second].mesh.vertexCount();
+            if (h.vertexCount != vertices)
+                fail(where + ": '" + file + "' has " + std::to_string(h.vertexCount) + " vertices per frame, but object '" +
+                     name + "' has " + std::to_string(vertices) + " (wrong vertex count)");
+            if (frames != 0 && h.frameCount != frames)
+                fail(where + ": '" + file + "' has " + std::to_string(h.frameCount) + " frames, but '" + first + "' has " +
+                     std::to_string(frames) + " (wrong frame count)");
+            if (frames == 0) frames = h.frameCount, first = file;
+            a.positionsFiles.push_back({it->second, path.string()});
+        }
+        std::sort(a.positionsFiles.begin(), a.positionsFiles.end(),
+                  [](const PositionsFileRef& x, const PositionsFileRef& y) { return x.object < y.object; });
+        return frames;
+    }
+
     Frame parseFrame(const Json& j, size_t f, const Scene& scene, const std::map<std::string, size_t>& byName) const {
         const std::string where = "animation.frames[" + std::to_string(f) + "]";
         requireObject(j, where);
@@ -248,23 +301,24 @@ std::string safeName(const std::string& name) {
     return s.substr(0, 64);
 }
 
-// The meshes a writeScene call created, removed again unless the call completes: a scene file
-// that cannot be written leaves no meshes behind without it. (Meshes that were there before are
-// overwritten, not removed: the call does not know what else uses them.)
-class CreatedMeshes {
+// The files a writeScene call created, removed again unless the call completes: a scene file
+// that cannot be written leaves no meshes or positions files behind without it. (Files that were
+// there before are overwritten, not removed: the call does not know what else uses them.)
+class CreatedFiles {
 public:
-    CreatedMeshes() = default;
-    CreatedMeshes(const CreatedMeshes&) = delete;
-    CreatedMeshes& operator=(const CreatedMeshes&) = delete;
-    ~CreatedMeshes() {
+    CreatedFiles() = default;
+    CreatedFiles(const CreatedFiles&) = delete;
+    CreatedFiles& operator=(const CreatedFiles&) = delete;
+    ~CreatedFiles() {
         std::error_code ec;
         if (!kept_)
             for (const fs::path& p : created_) fs::remove(p, ec);
     }
-    void write(const Mesh& mesh, const fs::path& path) {
+    // Writes `path` with write(path).
+    void write(const fs::path& path, const std::function<void(const fs::path&)>& write) {
         std::error_code ec;
         const bool existed = fs::exists(fs::symlink_status(path, ec));
-        writeOff(mesh, path);
+        write(path);
         if (!existed) created_.push_back(path);
     }
     void keep() { kept_ = true; }
@@ -273,6 +327,58 @@ private:
     std::vector<fs::path> created_;
     bool kept_ = false;
 };
+
+// Whether any frame changes object i's positions.
+bool deforms(const Animation& a, size_t i) {
+    if (a.positionsFileOf(i)) return true;
+    for (const Frame& fr : a.frames)
+        if (i < fr.poses.size() && (fr.poses[i].positions || !fr.poses[i].positionsFile.empty())) return true;
+    return false;
+}
+
+// Object i's positions in every frame as one positions file at `path` (the base mesh's in the
+// frames that leave them), read and written a frame at a time.
+void writeObjectFrames(const Animation& a, size_t i, const fs::path& path) {
+    const Mesh& base = a.scene.objects[i].mesh;
+    if (base.vertexCount() > std::numeric_limits<uint32_t>::max())
+        throw InputError(pathText(path), "object '" + a.scene.objects[i].name + "' has more than 2^32 - 1 vertices");
+    if (a.frames.size() > kMaxPositionsFrames)
+        throw InputError(pathText(path), std::to_string(a.frames.size()) + " frames, over the limit of " +
+                                             std::to_string(kMaxPositionsFrames) + " for a positions file");
+    std::optional<std::vector<Vec3f>> current;
+    writePositionsFile(path, uint32_t(base.vertexCount()), a.frames.size(), [&](uint64_t f) {
+        current = a.framePositions(size_t(f), i);
+        return current ? std::span<const Vec3f>(*current) : std::span<const Vec3f>(base.positions);
+    });
+}
+
+// The "animation" object: a positions file per deforming object, and the frames' transforms
+// ("frames" left out when no frame gives one: the files say how many frames there are).
+OrderedJson animationJson(const Animation& a, const fs::path& dir, const std::vector<std::string>& bases,
+                          CreatedFiles& files) {
+    OrderedJson positions = OrderedJson::object();
+    for (size_t i = 0; i < a.scene.objects.size(); ++i) {
+        if (!deforms(a, i)) continue;
+        const std::string file = bases[i] + ".pos";
+        files.write(dir / file, [&](const fs::path& p) { writeObjectFrames(a, i, p); });
+        positions[a.scene.objects[i].name] = file;
+    }
+    OrderedJson frames = OrderedJson::array();
+    bool anyTransform = false;
+    for (const Frame& fr : a.frames) {
+        OrderedJson poses = OrderedJson::object();
+        for (size_t i = 0; i < fr.poses.size(); ++i)
+            if (fr.poses[i].transform)
+                poses[a.scene.objects[i].name] = OrderedJson{{"transform", transformJson(*fr.poses[i].transform)}};
+        OrderedJson jf = OrderedJson::object();
+        if (!poses.empty()) jf["objects"] = std::move(poses), anyTransform = true;
+        frames.push_back(std::move(jf));
+    }
+    OrderedJson j = OrderedJson::object();
+    if (!positions.empty()) j["positions"] = std::move(positions);
+    if (anyTransform || j.empty()) j["frames"] = std::move(frames);
+    return j;
+}
 
 }  // namespace
 
@@ -300,12 +406,12 @@ void writeScene(const Animation& animation, const fs::path& path) {
     OrderedJson root;
     OrderedJson objects = OrderedJson::array();
     std::vector<std::string> bases;
-    CreatedMeshes meshes;
+    CreatedFiles files;
     for (size_t i = 0; i < animation.scene.objects.size(); ++i) {
         const Object& o = animation.scene.objects[i];
         const std::string base = stem + "_" + std::to_string(i) + "_" + safeName(o.name);
         bases.push_back(base);
-        meshes.write(o.mesh, dir / (base + ".off"));
+        files.write(dir / (base + ".off"), [&](const fs::path& p) { writeOff(o.mesh, p); });
         OrderedJson jo;
         jo["name"] = o.name;
         jo["mesh"] = base + ".off";
@@ -313,36 +419,9 @@ void writeScene(const Animation& animation, const fs::path& path) {
         objects.push_back(std::move(jo));
     }
     root["objects"] = std::move(objects);
-    if (!animation.frames.empty()) {
-        OrderedJson frames = OrderedJson::array();
-        for (size_t f = 0; f < animation.frames.size(); ++f) {
-            const Frame& fr = animation.frames[f];
-            OrderedJson poses = OrderedJson::object();
-            for (size_t i = 0; i < fr.poses.size(); ++i) {
-                const ObjectPose& p = fr.poses[i];
-                if (!p.transform && !p.positions && p.positionsFile.empty()) continue;
-                OrderedJson jp;
-                if (p.transform) jp["transform"] = transformJson(*p.transform);
-                if (p.positions || !p.positionsFile.empty()) {
-                    char num[32];
-                    std::snprintf(num, sizeof num, "%04zu", f);
-                    const std::string file = bases[i] + "_f" + num + ".off";
-                    Mesh m;
-                    m.positions = p.positions ? *p.positions : animation.sceneAt(f).objects[i].mesh.positions;
-                    m.triangles = animation.scene.objects[i].mesh.triangles;
-                    meshes.write(m, dir / file);
-                    jp["positions"] = file;
-                }
-                poses[animation.scene.objects[i].name] = std::move(jp);
-            }
-            OrderedJson jf = OrderedJson::object();
-            if (!poses.empty()) jf["objects"] = std::move(poses);
-            frames.push_back(std::move(jf));
-        }
-        root["animation"]["frames"] = std::move(frames);
-    }
+    if (!animation.frames.empty()) root["animation"] = animationJson(animation, dir, bases, files);
     writeFileAtomically(path, root.dump(2) + "\n");
-    meshes.keep();
+    files.keep();
 }
 
 }  // namespace cullide

@@ -147,6 +147,43 @@ def scene_cases(d):
     ]
 
 
+def positions_file(frames, vertices=8, magic=b"CULVERTS", nan_at=None):
+    """A positions file (docs/scene-format.md) of the cube's vertices moved up by f in frame f; a NaN
+    at frame nan_at when given."""
+    data = magic + struct.pack("<IIQQ", 1, vertices, frames, 0)
+    corners = [[float(c) for c in line.split()] for line in CUBE_OFF.splitlines()[2:2 + vertices]]
+    for f in range(frames):
+        for v, (x, y, z) in enumerate(corners):
+            data += struct.pack("<3f", x, float("nan") if (f, v) == (nan_at, 3) else y, z + f)
+    return data
+
+
+def positions_cases(d):
+    """Scenes whose deforming object's frames come from a positions file that is not what it says."""
+    good = positions_file(3)
+    write(d, "cut.pos", good[:-7], mode="wb")
+    write(d, "magic.pos", positions_file(3, magic=b"CULTRACE"), mode="wb")
+    write(d, "nan_later.pos", positions_file(3, nan_at=2), mode="wb")
+    write(d, "seven.pos", positions_file(3, vertices=7), mode="wb")
+    os.mkfifo(os.path.join(d, "fifo.pos"))
+    for name in ["cut", "magic", "nan_later", "seven", "fifo"]:
+        write(d, "pos_%s.json" % name, json.dumps({"objects": [{"name": "a", "mesh": "cube.off"}],
+                                                   "animation": {"positions": {"a": name + ".pos"}}}))
+    return [
+        Case("positions file: truncated", ["info", "pos_cut.json"], names=["pos_cut.json", "cut.pos", "truncated"]),
+        Case("positions file: wrong magic", ["info", "pos_magic.json"], names=["magic.pos", "wrong magic"]),
+        Case("positions file: wrong vertex count", ["prune", "pos_seven.json"], names=["seven.pos", "vertex count"]),
+        Case("positions file: NaN in a later frame", ["prune", "pos_nan_later.json", "--resolution", "16",
+                                                      "--json", "pos_nan_out.json"],
+             names=["nan_later.pos", "frame 2"], check=leaves_nothing(d, "pos_nan_out.json")),
+        Case("positions file: NaN in a later frame, oracle", ["oracle", "pos_nan_later.json", "--frame", "2"],
+             names=["nan_later.pos", "frame 2"]),
+        Case("positions file: NaN in a later frame, info", ["info", "pos_nan_later.json", "--all-frames"],
+             names=["nan_later.pos", "frame 2"]),
+        Case("positions file: a FIFO", ["info", "pos_fifo.json"], names=["fifo.pos", "FIFO"]),
+    ]
+
+
 def trace_cases(d, cullide):
     write(d, "pair.json", scene([{"name": "a", "mesh": "cube.off"},
                                  {"name": "b", "mesh": "cube.off", "transform": {"translate": [0.5, 0.5, 0.5]}}]))
@@ -296,6 +333,7 @@ checks = {
     "resolution 4294967396": lambda: cullide.prune(cullide.load_scene(sys.argv[1]), resolution=4294967396),
     "an empty object name": lambda: cullide.Scene().add("", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]),
     "a mesh path with a NUL": lambda: cullide.load_mesh("cu\0be.off"),
+    "a NaN in a positions file's frame 2": lambda: cullide.load_scene(sys.argv[2]).world_mesh(0, 2),
 }
 bad = 0
 for name, f in checks.items():
@@ -315,7 +353,7 @@ sys.exit(1 if bad else 0)
     # The package as this process found it, also from the corpus folder (PYTHONPATH may be relative).
     package = os.path.dirname(os.path.dirname(os.path.abspath(cullide.__file__)))
     return [("python", [sys.executable, "-c", "import sys; sys.path.insert(0, %r)\n" % package + code,
-                        os.path.join(d, "pair.json")])]
+                        os.path.join(d, "pair.json"), os.path.join(d, "pos_nan_later.json")])]
 
 
 def run_case(cullide, d, case):
@@ -354,7 +392,7 @@ def main():
     cullide = os.path.abspath(args.cullide)
     d = args.keep or tempfile.mkdtemp(prefix="cullide-hostile-")
     os.makedirs(d, exist_ok=True)
-    cases = mesh_cases(d) + scene_cases(d) + trace_cases(d, cullide) + spec_cases(d) + option_cases(d) + \
+    cases = mesh_cases(d) + scene_cases(d) + positions_cases(d) + trace_cases(d, cullide) + spec_cases(d) + option_cases(d) + \
         output_cases(d) + csv_cases(d)
     failed = 0
     for case in cases:

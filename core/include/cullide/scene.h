@@ -8,8 +8,9 @@
 //     so every backend and the oracle see bit-identical world coordinates.
 //   - An Animation is a base scene plus frames. A frame may give, per object, a rigid/affine
 //     transform (moving objects) and/or a full set of vertex positions in model space (deforming
-//     objects); anything a frame leaves out stays as in the base scene. Topology (the triangle
-//     list) never changes between frames.
+//     objects); anything a frame leaves out stays as in the base scene. A deforming object's
+//     positions may instead come from a positions file (positions_file.h) holding every frame of
+//     it. Topology (the triangle list) never changes between frames.
 #pragma once
 
 #include "cullide/mesh.h"
@@ -74,7 +75,7 @@ struct ObjectPose {
     std::optional<std::vector<Vec3f>> positions;  // replaces its model-space positions (same count)
     // Or, when `positions` is empty, the mesh file whose positions replace them, read (and checked
     // again) each time the frame is used: a scene file's animation keeps one frame in memory, not
-    // all of them (loadAnimation reads and checks every frame once, then drops its positions).
+    // all of them (loadScene reads and checks every such frame once, then drops its positions).
     std::string positionsFile;
 };
 
@@ -82,15 +83,31 @@ struct Frame {
     std::vector<ObjectPose> poses;  // empty, or one per object of the base scene
 };
 
+// An object whose model-space positions in every frame come from a positions file
+// (positions_file.h): frame f of the animation takes frame f of the file, read (and checked) each
+// time the frame is used; the file has one frame per frame of the animation. No frame gives
+// that object positions of its own (a frame may still give it a transform).
+struct PositionsFileRef {
+    size_t object = 0;  // index in the base scene
+    std::string path;
+};
+
 struct Animation {
     Scene scene;  // the base scene (frame-independent data: names, triangles)
     std::vector<Frame> frames;  // may be empty: a still scene
+    std::vector<PositionsFileRef> positionsFiles;  // at most one per object (loadScene: in object order)
 
     size_t frameCount() const { return frames.empty() ? 1 : frames.size(); }
     // The scene as it is at frame f (f < frameCount()). Throws InputError(file, ...) when a
-    // pose's positionsFile no longer reads as it did (gone, changed vertex count, non-finite, world
-    // coordinates checkWorldPositions refuses).
+    // pose's positionsFile or a positions file no longer reads as it did (gone, changed vertex
+    // count, non-finite, world coordinates checkWorldPositions refuses), naming the frame.
     Scene sceneAt(size_t f) const;
+    // Object i's model-space positions at frame f when that frame changes them (nullopt when they
+    // are the base mesh's): a pose's positions, its positionsFile's, or the object's positions
+    // file's frame f, checked as sceneAt checks them.
+    std::optional<std::vector<Vec3f>> framePositions(size_t f, size_t i) const;
+    // The object's entry in positionsFiles, or nullptr.
+    const PositionsFileRef* positionsFileOf(size_t i) const;
 };
 
 // The largest magnitude a world coordinate may have. The exact predicates decide on coordinates up
@@ -115,9 +132,11 @@ void checkSceneObjects(const Scene& scene, const std::string& source);
 
 // Throws InputError(source, ...) when the animation is not one cullide can use: objects as
 // checkSceneObjects wants them; a frame that does not fit the base scene (wrong number of poses,
-// wrong number of positions, non-finite positions or transforms); world coordinates, in the base
-// scene or any frame held in memory, that checkWorldPositions refuses. (A frame's positions file
-// is checked where it is read: by the scene loader, and again by sceneAt.)
+// wrong number of positions, non-finite positions or transforms); a positionsFiles entry for no
+// object, a second one for an object, one without frames, or one for an object a frame gives
+// positions too; world coordinates, in the base scene or any frame held in memory, that
+// checkWorldPositions refuses. (Files are checked where they are read: by the scene loader, and
+// again by sceneAt.)
 void validateAnimation(const Animation& animation, const std::string& source);
 // Throws InputError(source, where + ...) unless `positions` fit `object`'s mesh (same vertex
 // count, all finite).

@@ -8,7 +8,8 @@
 //       ...
 //     ],
 //     "animation": {                                           // optional
-//       "frames": [
+//       "positions": {"cloth": "cloth.pos"},                   // every frame of it (optional)
+//       "frames": [                                            // optional with "positions"
 //         {"objects": {"bunny": {"transform": {...}, "positions": "frames/bunny_001.off"}}},
 //         ...
 //       ]
@@ -19,7 +20,8 @@
 // one-object scene named after the file. Every problem throws InputError naming the scene file
 // (or the mesh file it refers to) and the cause: malformed JSON (with line/column), a missing
 // or mistyped key, an unknown key, an unreadable mesh, a duplicate object name, a frame that
-// refers to an unknown object or gives the wrong number of positions.
+// refers to an unknown object or gives the wrong number of positions, a positions file whose
+// header, size, vertex count or frame count is wrong (positions_file.h).
 #pragma once
 
 #include "cullide/scene.h"
@@ -31,9 +33,11 @@ namespace cullide {
 // Loads a scene file (.json) or a single mesh file. Throws InputError.
 Animation loadScene(const std::filesystem::path& path);
 
-// Writes `animation` as a scene file at `path`, each object's mesh (and per-frame positions)
-// as OFF files under `path`'s folder named from the scene's stem and the object name.
-// Deterministic: the same animation gives the same bytes. Throws InputError on write failure.
+// Writes `animation` as a scene file at `path`, each object's mesh as an OFF file and each
+// deforming object's positions in every frame as one positions file (.pos), beside it, named from
+// the scene's stem, the object's index and its name. Deterministic: the same animation gives the
+// same bytes. When the scene file cannot be written, the files this call created are removed.
+// Throws InputError on write failure, or when a frame's positions file no longer reads.
 void writeScene(const Animation& animation, const std::filesystem::path& path);
 
 }  // namespace cullide
