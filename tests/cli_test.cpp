@@ -174,6 +174,24 @@ TEST(Cli, MakeSceneIsByteReproducible) {
     EXPECT_NE(readTree(clothA), readTree(e)) << "seeds 7 and 8 gave the same cloth";
 }
 
+// Trap: a summary of every frame that reads one frame and repeats it, or holds them all at once:
+// `info --all-frames` gives one entry per frame, and a deforming object's entries differ (the
+// twist grows), while the total stays that of the frame asked for.
+TEST(Cli, InfoSummarisesEveryFrame) {
+    const fs::path d = freshDir("info_frames");
+    const std::string scene = quote((d / "t.json").string());
+    ASSERT_EQ(runCli("make-scene twist --triangles 1000 --frames 3 -o " + scene).status, 0);
+    const CliRun r = runCli("info --json --all-frames " + scene);
+    ASSERT_EQ(r.status, 0) << r.output;
+    const auto j = nlohmann::json::parse(r.output);
+    const auto& frames = j[0]["every_frame"];
+    ASSERT_EQ(frames.size(), 3u) << r.output;
+    EXPECT_EQ(frames[0]["triangles"], frames[2]["triangles"]);
+    EXPECT_NE(frames[0]["bounds"], frames[2]["bounds"]) << "the twist does not change the bounds";
+    const CliRun text = runCli("info --all-frames " + scene);
+    EXPECT_EQ(text.status, 0) << text.output;
+}
+
 // A generator whose input is bad fails before writing: nothing half-written is left behind.
 TEST(Cli, MakeSceneWithBadMeshWritesNothing) {
     const fs::path d = freshDir("badmesh");
