@@ -1,6 +1,7 @@
 // The Python module: studies (study, study_columns).
 #include "types.h"
 
+#include "cullide/parse_number.h"
 #include "cullide/raster/backends.h"
 #include "cullide/study/study.h"
 
@@ -17,7 +18,7 @@ void bindStudy(py::module_& m) {
            const std::vector<std::string>& directions, const std::vector<std::string>& hierarchies,
            const std::vector<py::object>& leafSizes, const std::vector<std::string>& backends,
            const std::vector<py::object>& threads, const py::object& repeats, bool oracle, const std::string& out,
-           const std::vector<std::string>& views, const std::vector<std::string>& exactSwitches) {
+           const std::vector<std::string>& views, const std::vector<std::string>& exactSwitches, double nearDistance) {
             if (scenes.empty()) fail("argument scenes: no scenes");
             study::StudyOptions o;
             study::Spec& s = o.spec;
@@ -36,6 +37,11 @@ void bindStudy(py::module_& m) {
             s.repeats = integerArgument(repeats, "argument repeats", 1, 1000);
             s.backends = backends, s.oracle = oracle;
             s.exactSwitches = exactSwitches, s.names.exactSwitch = "argument exact_switches";
+            if (!(nearDistance >= 0 && nearDistance <= study::kMaxNearDistance))
+                fail("argument near_distance: " + numberText(nearDistance) + " is out of range (0 to " +
+                     numberText(study::kMaxNearDistance) + ")");
+            if (nearDistance > 0 && !oracle) fail("argument near_distance: near contacts need the oracle (oracle=True)");
+            s.nearDistance = nearDistance;
             for (const std::string& b : backends)
                 if (!raster::isBackendName(b))
                     fail("argument backends: '" + b + "' is not a backend (" + raster::backendNameList() + ")");
@@ -51,7 +57,7 @@ void bindStudy(py::module_& m) {
         py::arg("scenes"), py::arg("methods"), py::arg("resolutions"), py::arg("depths"), py::arg("directions"),
         py::arg("hierarchies"), py::arg("leaf_sizes"), py::arg("backends"), py::arg("threads"), py::arg("repeats"),
         py::arg("oracle"), py::arg("out"), py::arg("views") = std::vector<std::string>{"fit"},
-        py::arg("exact_switches") = std::vector<std::string>{"never"},
+        py::arg("exact_switches") = std::vector<std::string>{"never"}, py::arg("near_distance") = 0.0,
         "Runs a study (see the package's study); returns the records as JSON texts.");
     m.def(
         "study_columns", [] { return study::columns(); }, "The study CSV's columns, in order.");

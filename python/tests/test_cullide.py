@@ -300,6 +300,23 @@ def test_study(tmp_path):
     assert list(v["views"]) == ["fit", "clustered"]
     with pytest.raises(ValueError, match="views"):
         cullide.study("cows:500", views="cluster", repeats=1, out=tmp_path / "u.csv")
+    # Near contacts: counted when asked, with the oracle only.
+    n = cullide.study("cows:500", resolutions=64, repeats=1, near_distance=0.01, out=tmp_path / "n.csv")
+    assert n["near_contacts"][0] > 0 and n["near_distance"][0] > 0
+    with pytest.raises(ValueError, match="near_distance"):
+        cullide.study("cows:500", repeats=1, near_distance=0.01, oracle=False, out=tmp_path / "m.csv")
+
+
+# Trap: a deforming object's frames read from its positions file one at a time: another frame
+# gives other positions, the last frame as the command line wrote it, and the same triangles.
+def test_positions_file_scene(tmp_path):
+    cli("make-scene", "cloth", "--triangles", "800", "--frames", "3", "-o", str(tmp_path / "c.json"))
+    s = cullide.load_scene(tmp_path / "c.json")
+    assert s.frame_count == 3 and s.names == ["cloth", "sphere"]
+    v0, f0 = s.world_mesh(0, frame=0)
+    v2, f2 = s.world_mesh(0, frame=2)
+    assert np.array_equal(f0, f2) and not np.array_equal(v0, v2)
+    assert v2[:, 1].min() < v0[:, 1].min()  # the cloth fell
 
 
 # Trap: the exact switch lost between Python and the core (the keyword ignored, so the default
