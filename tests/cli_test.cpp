@@ -88,6 +88,7 @@ TEST(Cli, AbsurdOptionsAreRefused) {
         {"make-scene nbody --frames 1001 -o " + out, "option --frames: 1001 is out of range for 'nbody'"},
         {"make-scene cloth --triangles 2000001 -o " + out, "option --triangles: 2000001 is out of range for 'cloth'"},
         {"make-scene cloth --self-collision sometimes -o " + out, "--self-collision"},
+        {"make-scene cloth --triangles 2000000 --frames 1000 -o " + out, "option --frames: 1000 frames of 2000000"},
         {"make-scene teapot -o " + out, "teapot"},
         {"make-scene bunny -o " + quote((d / "s.txt").string()), "--out"},
         {"info --frame -1 " + quote(kData + "/meshes/cow.off"), "--frame"},

@@ -194,6 +194,7 @@ TEST(Cloth, BadRequestsRefusedByName) {
     refused(request(kMaxClothTriangles + 1, 3), "triangles");
     refused(request(1000, 0), "frames");
     refused(request(1000, kMaxClothFrames + 1), "frames");
+    refused(request(kMaxClothTriangles, kMaxClothFrames), "triangles x frames");  // 12 GB of frames
     EXPECT_NO_THROW(makeCloth(request(kMinClothTriangles, 1)));
 }
 

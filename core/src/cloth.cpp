@@ -24,6 +24,10 @@ void checkRequest(const ClothRequest& r) {
     if (r.frames < 1 || r.frames > kMaxClothFrames)
         throw InputError("cloth", "frames must be in [1, " + std::to_string(kMaxClothFrames) + "], got " +
                                       std::to_string(r.frames));
+    if (r.triangles * r.frames > kMaxClothTriangleFrames)
+        throw InputError("cloth", "triangles x frames must be at most " + std::to_string(kMaxClothTriangleFrames) +
+                                      " (every frame is held in memory: about 6 bytes per triangle and frame), got " +
+                                      std::to_string(r.triangles) + " x " + std::to_string(r.frames));
 }
 
 // Cells per side of the square grid whose 2 n^2 triangles come closest to `triangles`.

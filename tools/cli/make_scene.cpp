@@ -122,6 +122,11 @@ void setSequenceDefaults(MakeSceneOptions& o, const CLI::App& sub) {
         throw InputError("option --frames", std::to_string(o.frames) + " is out of range for '" +
                                                 (cloth ? "cloth" : "nbody") + "' (1 to " + std::to_string(maxFrames) +
                                                 ")");
+    if (cloth && o.triangles <= kMaxClothTriangles && o.triangles * o.frames > kMaxClothTriangleFrames)
+        throw InputError("option --frames", std::to_string(o.frames) + " frames of " + std::to_string(o.triangles) +
+                                                " triangles: 'cloth' holds every frame in memory, so triangles x "
+                                                "frames must be at most " +
+                                                std::to_string(kMaxClothTriangleFrames));
     if (cloth && o.triangles > kMaxClothTriangles)
         throw InputError("option --triangles", std::to_string(o.triangles) + " is out of range for 'cloth' (100 to " +
                                                    std::to_string(kMaxClothTriangles) + ")");

@@ -37,7 +37,8 @@ def frames_chart(rows, out):
     for ax, scene in zip(axes.flat, scenes):
         frames = sorted(truth[scene])
         series = [("crossing pairs", "oracle_crossing", "k", "-"), ("touching pairs", "oracle_touching", "k", ":"),
-                  ("near contacts", "near_contacts", "tab:gray", "--")]
+                  ("near contacts", "near_contacts", "tab:gray", "--"),
+                  ("near contacts within objects", "near_contacts_self", "tab:gray", ":")]
         for label, column, color, style in series:
             ys = [num(truth[scene][f].get(column)) for f in frames]
             if all(y is not None for y in ys):

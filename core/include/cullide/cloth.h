@@ -62,6 +62,10 @@ struct ClothRequest {
 };
 
 inline constexpr size_t kMinClothTriangles = 100, kMaxClothTriangles = 2'000'000, kMaxClothFrames = 1000;
+// Every frame's positions are held until the scene is written (12 bytes a vertex, about half a
+// vertex a triangle): triangles x frames is bounded too (the default is 8.6 million; this bound
+// holds about 1.2 GB of frames, 2,000,000 triangles for 100 frames).
+inline constexpr size_t kMaxClothTriangleFrames = 200'000'000;
 
 // Throws InputError("cloth", ...) naming the field when the request is out of the ranges above.
 // Every frame is held in memory: frames x vertices x 12 bytes (the default: 52 MB).
