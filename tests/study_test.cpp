@@ -476,6 +476,19 @@ TEST(Study, NearContactsAreCountedWhenAsked) {
     EXPECT_THROW((void)expand(blind), InputError);
 }
 
+// Trap: a preset that names a scene or method the sweep cannot run fails only when its turn
+// comes, hours in: the deforming preset expands (every scene string parsed) to its 18 runs, the
+// sizes of the field's sequences last, near contacts on.
+TEST(Study, DeformingPresetExpands) {
+    const Spec s = deformingPreset(1);
+    const std::vector<RunConfig> runs = expand(s);
+    ASSERT_EQ(runs.size(), 18u);
+    EXPECT_EQ(runs[8].scene, "cloth:92000");
+    EXPECT_EQ(runs.back().scene, "nbody:146000");
+    EXPECT_EQ(runs.back().method, "reliable");
+    EXPECT_GT(runs.back().nearDistance, 0);
+}
+
 // Trap: a study output of which one file could not be written leaving the other behind (a CSV
 // with its header only and no records): the CSV and its JSON lines appear together or not at all.
 TEST(Study, OutputsAreWrittenTogetherOrNotAtAll) {

@@ -202,7 +202,8 @@ void addStudyCommand(CLI::App& app, Action& action) {
     sub->add_flag("--no-oracle", o->noOracle, "Time only: no oracle, no false prunes");
     addNumber(sub, "--near-distance", o->nearDistance,
               "Count near contacts (pairs this close that do not intersect) per scene and frame, the distance as a "
-              "fraction of the scene's bounding-box diagonal (0: not counted, the default; at most 0.1)",
+              "fraction of the scene's bounding-box diagonal at its first frame (0: not counted, the default; at most "
+              "0.1)",
               0.0, study::kMaxNearDistance);
     sub->add_option("--shard", o->shard,
                     "Run only slice i of N (i/N, 0-based; e.g. $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT)");

@@ -185,13 +185,14 @@ PcsReport measurePcs(const Scene& scene, const Truth& truth, std::span<const Pcs
     return r;
 }
 
-NearMeasure measureNear(const Scene& scene, const oracle::Truth& truth, double fraction) {
+double sceneDiagonal(const Scene& scene) {
     Bounds box;
     for (size_t i = 0; i < scene.objects.size(); ++i) box.add(referencedBounds(scene.worldMesh(i)));
-    NearMeasure m;
-    m.distance = box.empty() ? 0.0 : fraction * box.extent().cast<double>().norm();
-    m.contacts = oracle::countNearContacts(scene, truth, m.distance);
-    return m;
+    return box.empty() ? 0.0 : box.extent().cast<double>().norm();
+}
+
+NearMeasure measureNear(const Scene& scene, const oracle::Truth& truth, double distance) {
+    return {distance, oracle::countNearContacts(scene, truth, distance)};
 }
 
 }  // namespace cullide::study

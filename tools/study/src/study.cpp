@@ -655,7 +655,11 @@ size_t runStudy(const StudyOptions& opt) {
             scene = loadStudyScene(c.scene, c.frame);
             truth.reset();
             if (opt.spec.oracle) truth = std::make_unique<oracle::Truth>(oracle::findIntersections(scene));
-            if (truth && opt.spec.nearDistance > 0) near = measureNear(scene, *truth, opt.spec.nearDistance);
+            if (truth && opt.spec.nearDistance > 0) {
+                // One distance for every frame of a scene: a fraction of its first frame's diagonal.
+                const double diagonal = c.frame == 0 ? sceneDiagonal(scene) : sceneDiagonal(loadStudyScene(c.scene, 0));
+                near = measureNear(scene, *truth, opt.spec.nearDistance * diagonal);
+            }
             sceneKey = key;
         }
         auto& backend = backends[{c.backend, c.threads}];

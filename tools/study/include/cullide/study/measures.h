@@ -68,12 +68,14 @@ struct PcsReport {
 PcsReport measurePcs(const Scene& scene, const oracle::Truth& truth, std::span<const PcsTriangle> pcs,
                      const CullideOptions& options);
 
-// The near contacts of a scene (cullide/oracle/near_contacts.h) within `fraction` of the diagonal
-// of its world bounding box (`distance`, world units); `truth` is the oracle's for the scene.
+// The near contacts of a scene (cullide/oracle/near_contacts.h) within `distance` (world units);
+// `truth` is the oracle's for the scene. A study's distance is a fraction of sceneDiagonal, the
+// diagonal of the scene's world bounding box, at its first frame (one distance for every frame).
 struct NearMeasure {
     double distance = 0;
     oracle::NearContacts contacts;
 };
-NearMeasure measureNear(const Scene& scene, const oracle::Truth& truth, double fraction);
+NearMeasure measureNear(const Scene& scene, const oracle::Truth& truth, double distance);
+double sceneDiagonal(const Scene& scene);
 
 }  // namespace cullide::study

@@ -60,7 +60,8 @@ struct Spec {
     int repeats = 3;  // timed runs per configuration (median, min, max)
     bool oracle = true;  // measure against the oracle and attribute causes
     // Near contacts (cullide/oracle/near_contacts.h) are counted per scene and frame within this
-    // fraction of the scene's bounding-box diagonal; 0: not counted (needs the oracle).
+    // fraction of the scene's bounding-box diagonal at its first frame (the same distance in every
+    // frame of an animation); 0: not counted (needs the oracle).
     double nearDistance = 0;
     // Each axis' name in errors: its spec key, or the command-line option that set it.
     OptionNames names = specOptionNames("study spec");
