@@ -644,6 +644,8 @@ size_t runStudy(const StudyOptions& opt) {
     Scene scene;
     std::unique_ptr<oracle::Truth> truth;
     NearMeasure near;
+    std::string diagonalScene;  // the scene whose first frame's diagonal `diagonal` is
+    double diagonal = 0;
     std::map<std::pair<std::string, int>, std::unique_ptr<DepthBackend>> backends;
     Progress bar("study", todo.size(), "runs", opt.progress);
     for (size_t i = 0; i < todo.size(); ++i) {
@@ -656,8 +658,10 @@ size_t runStudy(const StudyOptions& opt) {
             truth.reset();
             if (opt.spec.oracle) truth = std::make_unique<oracle::Truth>(oracle::findIntersections(scene));
             if (truth && opt.spec.nearDistance > 0) {
-                // One distance for every frame of a scene: a fraction of its first frame's diagonal.
-                const double diagonal = c.frame == 0 ? sceneDiagonal(scene) : sceneDiagonal(loadStudyScene(c.scene, 0));
+                // One distance for every frame of a scene: a fraction of its first frame's diagonal,
+                // found once per scene (its frames come in a row).
+                if (c.scene != diagonalScene)
+                    diagonal = sceneDiagonal(c.frame == 0 ? scene : loadStudyScene(c.scene, 0)), diagonalScene = c.scene;
                 near = measureNear(scene, *truth, opt.spec.nearDistance * diagonal);
             }
             sceneKey = key;
