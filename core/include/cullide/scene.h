@@ -38,6 +38,16 @@ struct TriangleRef {
     friend auto operator<=>(const TriangleRef&, const TriangleRef&) = default;
 };
 
+// An unordered pair of triangles of a scene, held as a < b (make() orders them): what a collision
+// detector reports (a peer, a pair list given to `cullide audit`). A pair within one object has
+// a.object == b.object.
+struct TrianglePair {
+    TriangleRef a, b;
+    static TrianglePair make(TriangleRef x, TriangleRef y) { return x < y ? TrianglePair{x, y} : TrianglePair{y, x}; }
+    bool selfPair() const { return a.object == b.object; }
+    friend auto operator<=>(const TrianglePair&, const TrianglePair&) = default;
+};
+
 struct Object {
     std::string name;
     Mesh mesh;
