@@ -138,14 +138,16 @@ def _as_list(value, name):
 
 def study(scenes, methods="modified", resolutions=500, depths="24", directions="axes", hierarchies="connectivity",
           leaf_sizes=16, backends="cpu", threads=0, repeats=3, oracle=True, out="study.csv", views="fit",
-          exact_switches="never", near_distance=0.0):
+          exact_switches="never", near_distance=0.0, tolerance=1e-5):
     """Run a precision study, as ``cullide study`` (docs/studies.md), and return its rows.
 
     Each argument takes one value or a list (the study's axes: every combination runs); scenes are
     files or the generated names of the command (e.g. 'bunny:5000', 'cows:2000', 'twist:5000',
     'cloth:10000', 'nbody:10000'). With oracle=True each run is measured against the exact oracle
     and its false prunes are attributed to causes; near_distance > 0 also counts near contacts
-    within that fraction of the scene's diagonal (as ``--near-distance``). Writes ``out`` (.csv, or .jsonl) exactly as the command does, through
+    within that fraction of the scene's diagonal (as ``--near-distance``). Methods include 'exact'
+    (the oracle alone) and the peers 'fcl', 'embree', 'bullet', 'cgal', whose pairs are judged
+    against the oracle with ``tolerance`` (a fraction of the diagonal, as ``--tolerance``). Writes ``out`` (.csv, or .jsonl) exactly as the command does, through
     the same study library.
 
     Returns the rows as a pandas DataFrame when pandas is installed, else a dict of numpy columns
@@ -160,7 +162,7 @@ def study(scenes, methods="modified", resolutions=500, depths="24", directions="
         _as_list(depths, "depths"), _as_list(directions, "directions"), _as_list(hierarchies, "hierarchies"),
         _as_list(leaf_sizes, "leaf_sizes"), _as_list(backends, "backends"), _as_list(threads, "threads"),
         int(repeats), bool(oracle), _os.fspath(out), _as_list(views, "views"),
-        _as_list(exact_switches, "exact_switches"), float(near_distance))
+        _as_list(exact_switches, "exact_switches"), float(near_distance), float(tolerance))
     rows = [json.loads(r) for r in records]
     columns = {}
     for name in _cullide.study_columns():

@@ -18,7 +18,8 @@ void bindStudy(py::module_& m) {
            const std::vector<std::string>& directions, const std::vector<std::string>& hierarchies,
            const std::vector<py::object>& leafSizes, const std::vector<std::string>& backends,
            const std::vector<py::object>& threads, const py::object& repeats, bool oracle, const std::string& out,
-           const std::vector<std::string>& views, const std::vector<std::string>& exactSwitches, double nearDistance) {
+           const std::vector<std::string>& views, const std::vector<std::string>& exactSwitches, double nearDistance,
+           double tolerance) {
             if (scenes.empty()) fail("argument scenes: no scenes");
             study::StudyOptions o;
             study::Spec& s = o.spec;
@@ -42,6 +43,10 @@ void bindStudy(py::module_& m) {
                      numberText(study::kMaxNearDistance) + ")");
             if (nearDistance > 0 && !oracle) fail("argument near_distance: near contacts need the oracle (oracle=True)");
             s.nearDistance = nearDistance;
+            if (!(tolerance >= 0 && tolerance <= study::kMaxTolerance))
+                fail("argument tolerance: " + numberText(tolerance) + " is out of range (0 to " +
+                     numberText(study::kMaxTolerance) + ")");
+            s.tolerance = tolerance;
             for (const std::string& b : backends)
                 if (!raster::isBackendName(b))
                     fail("argument backends: '" + b + "' is not a backend (" + raster::backendNameList() + ")");
@@ -58,6 +63,7 @@ void bindStudy(py::module_& m) {
         py::arg("hierarchies"), py::arg("leaf_sizes"), py::arg("backends"), py::arg("threads"), py::arg("repeats"),
         py::arg("oracle"), py::arg("out"), py::arg("views") = std::vector<std::string>{"fit"},
         py::arg("exact_switches") = std::vector<std::string>{"never"}, py::arg("near_distance") = 0.0,
+        py::arg("tolerance") = study::kDefaultTolerance,
         "Runs a study (see the package's study); returns the records as JSON texts.");
     m.def(
         "study_columns", [] { return study::columns(); }, "The study CSV's columns, in order.");

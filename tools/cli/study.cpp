@@ -5,6 +5,7 @@
 
 #include "cullide/error.h"
 #include "cullide/file_io.h"
+#include "cullide/oracle/audit.h"
 #include "cullide/raster/backends.h"
 #include "cullide/study/probes.h"
 #include "cullide/study/study.h"
@@ -24,6 +25,7 @@ struct StudyCliOptions {
     std::vector<int> threads;
     int repeats = 0;  // 0: the spec's
     double nearDistance = -1;  // < 0: the spec's
+    double tolerance = -1;  // < 0: the spec's
     bool noOracle = false;
     std::string shard;
     std::string out = "study.csv";
@@ -64,10 +66,62 @@ study::Spec buildSpec(const StudyCliOptions& o) {
     if (o.repeats > 0) s.repeats = o.repeats;
     if (o.noOracle) s.oracle = false;
     if (o.nearDistance >= 0) s.nearDistance = o.nearDistance;
+    if (o.tolerance >= 0) s.tolerance = o.tolerance;
     if (s.nearDistance > 0 && !s.oracle)
         throw InputError("option --no-oracle", "near contacts are counted against the oracle (--near-distance)");
     if (s.scenes.empty()) throw InputError("study", "no scenes: give a SPEC file, --preset paper|deforming or --scenes");
     return s;
+}
+
+// A number of the record, or 0 for null.
+size_t countOf(const nlohmann::ordered_json& r, const char* key) {
+    return r.contains(key) && r[key].is_number() ? r[key].get<size_t>() : 0;
+}
+
+// What the study could not explain: false prunes of image-space runs, missed and spurious pairs of
+// the others.
+size_t unexplainedOf(const nlohmann::ordered_json& r) {
+    return countOf(r, "fp_unexplained") + countOf(r, "missed_unexplained") + countOf(r, "spurious_unexplained");
+}
+
+std::string msText(const char* what, double ms) {
+    char text[96];
+    std::snprintf(text, sizeof text, what, ms);
+    return text;
+}
+
+// "bunny:5000 modified 500 24 axes: 12.3 ms, 9 calls, PCS 120 of 5000; false prunes ..."
+std::string imageRunLine(const nlohmann::ordered_json& r) {
+    std::string causes;
+    if (!r["false_prunes"].is_null())
+        causes = " false prunes " + r["false_prunes"].dump() + " (depth " + r["fp_depth_rounding"].dump() +
+                 ", sampling " + r["fp_sampling"].dump() + ", edge-on " + r["fp_edge_on"].dump() + ", untested " +
+                 r["fp_untested"].dump() + ", unexplained " + r["fp_unexplained"].dump() + ")";
+    // The switch is named only when set, and the time to exact pairs only when the oracle ran.
+    std::string exact;
+    if (r.value("exact_switch", "never") != "never") exact = " exact switch " + r["exact_switch"].get<std::string>();
+    if (r["time_to_exact_ms"].is_number()) causes += msText(", %.1f ms to exact pairs", r["time_to_exact_ms"].get<double>());
+    return r["scene"].get<std::string>() + " " + r["method"].get<std::string>() + " " +
+           r["resolution"].get<std::string>() + " " + r["depth"].get<std::string>() + " " +
+           r["directions"].get<std::string>() + exact + msText(": %.1f ms, ", r["time_ms"].get<double>()) +
+           r["calls"].dump() + " calls, PCS " + r["pcs"].dump() + " of " + r["triangles"].dump() + ";" + causes;
+}
+
+// "cloth:10000 embree: 8.1 ms to pairs; found 40, missed 2 (shared_vertex 2), spurious 0"
+std::string pairRunLine(const nlohmann::ordered_json& r) {
+    std::string line = r["scene"].get<std::string>() + " " + r["method"].get<std::string>() +
+                       msText(": %.1f ms to pairs", r["time_to_pairs_ms"].get<double>());
+    if (r["pairs_found"].is_null()) return line + " (no oracle)";
+    const auto causes = [&](const std::string& prefix, const std::vector<oracle::AuditCause>& list) {
+        std::string text;
+        for (oracle::AuditCause c : list)
+            if (const size_t n = countOf(r, (prefix + toString(c)).c_str()); n > 0)
+                text += (text.empty() ? "" : ", ") + std::string(toString(c)) + " " + std::to_string(n);
+        return text.empty() ? std::string() : " (" + text + ")";
+    };
+    return line + "; found " + r["pairs_found"].dump() + ", missed " + r["pairs_missed"].dump() +
+           causes("missed_", oracle::missedCauses()) + ", spurious " + r["pairs_spurious"].dump() +
+           causes("spurious_", oracle::spuriousCauses());
 }
 
 int runStability(const StudyCliOptions& o) {
@@ -142,32 +196,14 @@ int runStudyCommand(const StudyCliOptions& o) {
     so.progress = o.quiet ? ProgressMode::Never : o.progress;
     size_t unexplained = 0;
     so.onRecord = [&](const nlohmann::ordered_json& r) {
-        if (!r["fp_unexplained"].is_null()) unexplained += r["fp_unexplained"].get<size_t>();
+        unexplained += unexplainedOf(r);
         if (o.quiet) return;
-        std::string causes;
-        if (!r["false_prunes"].is_null())
-            causes = " false prunes " + r["false_prunes"].dump() + " (depth " + r["fp_depth_rounding"].dump() +
-                ", sampling " + r["fp_sampling"].dump() + ", edge-on " + r["fp_edge_on"].dump() + ", untested " +
-                r["fp_untested"].dump() + ", unexplained " + r["fp_unexplained"].dump() + ")";
-        // The switch is named only when set, and the time to exact pairs only when the oracle ran.
-        std::string exact;
-        if (r.value("exact_switch", "never") != "never")
-            exact = " exact switch " + r["exact_switch"].get<std::string>();
-        if (r.contains("time_to_exact_ms") && r["time_to_exact_ms"].is_number()) {
-            char text[64];
-            std::snprintf(text, sizeof text, ", %.1f ms to exact pairs", r["time_to_exact_ms"].get<double>());
-            causes += text;
-        }
-        std::printf("%s %s %s %s %s%s: %.1f ms, %s calls, PCS %s of %s;%s\n", r["scene"].get<std::string>().c_str(),
-                    r["method"].get<std::string>().c_str(), r["resolution"].get<std::string>().c_str(),
-                    r["depth"].get<std::string>().c_str(), r["directions"].get<std::string>().c_str(), exact.c_str(),
-                    r["time_ms"].get<double>(), r["calls"].dump().c_str(), r["pcs"].dump().c_str(),
-                    r["triangles"].dump().c_str(), causes.c_str());
+        std::printf("%s\n", (r["family"] == "image-space" ? imageRunLine(r) : pairRunLine(r)).c_str());
         std::fflush(stdout);
     };
     const size_t done = study::runStudy(so);
     const study::OutputPaths paths = study::outputPaths(so.out);
-    std::printf("study: %zu run(s) done, results in %s and %s; unexplained false prunes: %zu\n", done,
+    std::printf("study: %zu run(s) done, results in %s and %s; unexplained false prunes and pairs: %zu\n", done,
                 paths.csv.string().c_str(), paths.jsonl.string().c_str(), unexplained);
     return unexplained ? 1 : 0;
 }
@@ -184,7 +220,9 @@ void addStudyCommand(CLI::App& app, Action& action) {
                     "deforming: cloth 10k-92k and N-body 10k-146k, original, modified and reliable, with near contacts");
     sub->add_option("--scenes", o->scenes,
                     "Scenes: bunny:N, cows:N, twist:N, cylinders:N[:C], cloth:N, nbody:N, or files (FILE@K: frame K)");
-    sub->add_option("--methods", o->methods, "Methods (as prune --method)");
+    sub->add_option("--methods", o->methods,
+                    "Methods: original, modified, reliable (as prune --method); exact (the oracle alone); the peers "
+                    "fcl, embree, bullet, cgal (docs/peers.md)");
     sub->add_option("--resolutions", o->resolutions, "Viewports: N or WxH, or auto / auto:K (adaptive)");
     sub->add_option("--depths", o->depths, "Depth formats: 8..32 or float");
     sub->add_option("--directions", o->directions,
@@ -205,6 +243,11 @@ void addStudyCommand(CLI::App& app, Action& action) {
               "fraction of the scene's bounding-box diagonal at its first frame (0: not counted, the default; at most "
               "0.1)",
               0.0, study::kMaxNearDistance);
+    addNumber(sub, "--tolerance", o->tolerance,
+              "The audit's tolerance for the pairs of exact and the peers: pairs closer than this, or crossing less "
+              "deep, are judged within tolerance (a fraction of the scene's bounding-box diagonal at its first frame; "
+              "default 1e-05, at most 0.1)",
+              0.0, study::kMaxTolerance);
     sub->add_option("--shard", o->shard,
                     "Run only slice i of N (i/N, 0-based; e.g. $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT)");
     sub->add_option("-o,--out", o->out,

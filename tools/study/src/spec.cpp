@@ -2,6 +2,8 @@
 // spec is an InputError naming the field (exit status 2), never an exception from deep inside.
 #include "cullide/study/study.h"
 
+#include "cullide/study/methods.h"
+
 #include "cullide/cullide.h"
 #include "cullide/error.h"
 #include "cullide/hierarchy.h"
@@ -115,7 +117,7 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
         if (key == "scenes") {
             s.scenes = r.texts(v, key, [](const std::string&) { return 0; });  // checked when expanded
         } else if (key == "methods") {
-            s.methods = r.texts(v, key, parseCullMethod);
+            s.methods = r.texts(v, key, [](const std::string& m) { return methodFamily(m, "method"); });
         } else if (key == "resolutions") {
             s.resolutions = r.texts(
                 v, key, [](const std::string& t) { return parseResolutionSetting(t); }, 1, kMaxViewportSide);
@@ -150,6 +152,8 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
             s.repeats = int(r.integer(r.single(v, key), key, 1, 1000));
         } else if (key == "near_distance") {
             s.nearDistance = r.real(r.single(v, key), key, 0, kMaxNearDistance);
+        } else if (key == "tolerance") {
+            s.tolerance = r.real(r.single(v, key), key, 0, kMaxTolerance);
         } else if (key == "oracle") {
             if (!v.is_boolean()) r.fail(key, "true or false, not " + v.dump());
             s.oracle = v.get<bool>();
@@ -157,7 +161,8 @@ Spec parseSpec(const nlohmann::json& j, const std::string& source) {
             throw InputError(source,
                              "unknown field '" + key +
                                  "' (fields: scenes, methods, resolutions, depths, directions, views, hierarchies, "
-                                 "leaf_sizes, exact_switches, backends, threads, branching, seed, repeats, near_distance, oracle)");
+                                 "leaf_sizes, exact_switches, backends, threads, branching, seed, repeats, near_distance, tolerance, "
+                                 "oracle)");
         }
     }
     return s;

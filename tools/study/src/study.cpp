@@ -3,8 +3,12 @@
 
 #include "cullide/study/causes.h"
 #include "cullide/study/measures.h"
+#include "cullide/study/methods.h"
 #include "cullide/pipeline/progress.h"
 #include "cullide/pipeline/pruner.h"
+
+#include "pair_run.h"
+#include "records.h"
 
 #include "cullide/cloth.h"
 #include "cullide/error.h"
@@ -39,11 +43,6 @@
 
 namespace cullide::study {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) {
-    return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 std::string dataDir() {
     return cullide::dataDir().string();
@@ -136,6 +135,12 @@ Spec deformingPreset(int repeats) {
     return s;
 }
 
+void RunConfig::clearImageAxes() {
+    resolution.clear(), depth.clear(), directions.clear(), hierarchy.clear(), backend.clear();
+    views = "fit", exactSwitch = "never";  // their defaults: not in the key
+    leafSize = 0, branching = 0, seed = 0;
+}
+
 std::string RunConfig::key() const {
     std::ostringstream k;
     k << scene << '|' << frame << '|' << method << '|' << resolution << '|' << depth << '|' << directions << '|'
@@ -143,6 +148,7 @@ std::string RunConfig::key() const {
     if (views != "fit") k << "|views=" << views;
     if (exactSwitch != "never") k << "|exact=" << exactSwitch;  // the defaults keep the ids they always had
     if (nearDistance > 0) k << "|near=" << numberText(nearDistance);
+    if (resolution.empty() && tolerance != kDefaultTolerance) k << "|tol=" << numberText(tolerance);  // a pair method
     return k.str();
 }
 
@@ -233,6 +239,14 @@ void appendCombinations(const Spec& spec, const std::string& scene, uint32_t fra
                                              spec.threads.size()};
     std::array<size_t, kAxes> i{};
     for (;;) {
+        // The exact method and the peers have only the threads axis: one run per thread count.
+        if (methodFamily(spec.methods[i[0]], spec.names.method) != MethodFamily::ImageSpace &&
+            (i[1] | i[2] | i[3] | i[4] | i[5] | i[6] | i[7] | i[8]) != 0) {
+            size_t k = kAxes;
+            while (k > 0 && ++i[k - 1] == sizes[k - 1]) i[--k] = 0;
+            if (k == 0) return;
+            continue;
+        }
         RunConfig c;
         c.index = out.size();
         c.scene = scene, c.frame = frame, c.method = spec.methods[i[0]], c.resolution = spec.resolutions[i[1]];
@@ -240,6 +254,8 @@ void appendCombinations(const Spec& spec, const std::string& scene, uint32_t fra
         c.hierarchy = spec.hierarchies[i[5]], c.leafSize = spec.leafSizes[i[6]], c.exactSwitch = spec.exactSwitches[i[7]];
         c.backend = spec.backends[i[8]], c.threads = spec.threads[i[9]];
         c.branching = spec.branching, c.seed = spec.seed, c.nearDistance = spec.nearDistance;
+        c.tolerance = spec.tolerance;
+        if (methodFamily(c.method, spec.names.method) != MethodFamily::ImageSpace) c.clearImageAxes();
         out.push_back(c);
         size_t k = kAxes;
         while (k > 0 && ++i[k - 1] == sizes[k - 1]) i[--k] = 0;
@@ -299,7 +315,12 @@ std::vector<RunConfig> expand(const Spec& spec) {
     std::vector<RunConfig> out;
     for (size_t s = 0; s < spec.scenes.size(); ++s)
         for (uint32_t frame : frames[s]) appendCombinations(spec, spec.scenes[s], frame, out);
-    for (const RunConfig& c : out) (void)cullideOptions(c, spec.names);  // every value checked before any run
+    for (const std::string& m : spec.methods) (void)methodFamily(m, spec.names.method);
+    if (!(spec.tolerance >= 0 && spec.tolerance <= kMaxTolerance))
+        throw InputError("study spec", "tolerance " + numberText(spec.tolerance) + " is out of range (0 to " +
+                                           numberText(kMaxTolerance) + ")");
+    for (const RunConfig& c : out)  // every value checked before any run
+        if (methodFamily(c.method, spec.names.method) == MethodFamily::ImageSpace) (void)cullideOptions(c, spec.names);
     return out;
 }
 
@@ -325,148 +346,6 @@ CullideOptions cullideOptions(const RunConfig& c, const OptionNames& names) {
     t.views = c.views;
     t.exactSwitch = c.exactSwitch;
     return parseCullideOptions(t, names);
-}
-
-nlohmann::ordered_json passJson(const PassStats& p, const CullideOptions& options) {
-    nlohmann::ordered_json j = {{"level", p.level},
-                                {"direction", p.direction},
-                                {"nodes_in", p.nodesIn},
-                                {"nodes_out", p.nodesOut},
-                                {"triangles_in", p.trianglesIn},
-                                {"triangles_out", p.trianglesOut},
-                                {"triangles_rendered", p.trianglesRendered},
-                                {"queries", p.queries},
-                                {"width", p.width},
-                                {"height", p.height},
-                                {"round", p.round},
-                                {"seconds", p.seconds}};
-    if (options.views != ViewMode::Fit) j["views"] = p.views;
-    if (p.tiles != p.views) j["tiles"] = p.tiles;  // drawn in tiles (a backend's limit)
-    if (options.directionMode != DirectionMode::Fixed)
-        j["direction_vector"] = {p.dirVector.x(), p.dirVector.y(), p.dirVector.z()};
-    return j;
-}
-
-nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const oracle::Truth* truth, int repeats,
-                              DepthBackend& backend) {
-    const CullideOptions options = cullideOptions(c);
-    std::unique_ptr<tbb::task_arena> arena =
-        c.threads > 0 ? std::make_unique<tbb::task_arena>(c.threads) : std::make_unique<tbb::task_arena>();
-    std::vector<std::pair<double, CullideResult>> timed;
-    // Which call pruned each triangle, for the attribution of false prunes to explain this very run
-    // (a write per pruned triangle: nothing measurable beside the run).
-    PruneSettings settings;
-    settings.cullide = options;
-    settings.cullide.recordPrunes = truth != nullptr;
-    for (int k = 0; k < repeats; ++k) {
-        executeIn(*arena, [&] {
-            // A Pruner per run: each is a first frame, and auto's cost model is fresh per run, so
-            // that every timed run pays for its calibration.
-            Pruner pruner(settings, backend);
-            const auto start = Clock::now();
-            CullideResult r = pruner.prune(scene).cull;
-            timed.emplace_back(secondsSince(start), std::move(r));
-        });
-    }
-    std::vector<size_t> order(timed.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return timed[a].first < timed[b].first; });
-    // Named without a structured binding: lambdas below use them (clang before 16 cannot capture one).
-    const double median = timed[order[order.size() / 2]].first;
-    const CullideResult& r = timed[order[order.size() / 2]].second;
-    size_t rendered = 0, queries = 0;
-    for (const PassStats& p : r.passes) rendered += p.trianglesRendered, queries += p.queries;
-
-    nlohmann::ordered_json j;
-    j["index"] = c.index;
-    j["id"] = c.id();
-    j["scene"] = c.scene;
-    j["frame"] = c.frame;
-    j["triangles"] = scene.triangleCount();
-    j["objects"] = scene.objects.size();
-    j["method"] = c.method;
-    j["resolution"] = c.resolution;
-    j["depth"] = options.depth.name();
-    j["directions"] = c.directions;
-    j["direction_count"] = options.directions.size();
-    j["views"] = c.views;
-    j["hierarchy"] = c.hierarchy;
-    j["leaf_size"] = c.leafSize;
-    j["branching"] = c.branching;
-    j["backend"] = c.backend;
-    j["threads"] = c.threads;
-    j["repeats"] = repeats;
-    j["time_ms"] = 1e3 * median;
-    j["time_min_ms"] = 1e3 * timed[order.front()].first;
-    j["time_max_ms"] = 1e3 * timed[order.back()].first;
-    j["hierarchy_ms"] = 1e3 * r.hierarchySeconds;
-    j["calls"] = r.passes.size();
-    j["levels"] = r.levels;
-    j["triangles_rendered"] = rendered;
-    j["queries"] = queries;
-    j["pcs"] = r.pcs.size();
-    for (const char* k : {"oracle_pairs",      "oracle_crossing", "oracle_touching",   "colliding",   "false_prunes",
-                          "fp_crossing",       "fp_touching",     "fp_depth_rounding", "fp_sampling", "fp_edge_on",
-                          "fp_untested",       "fp_unexplained",  "missed_pairs",      "mp_crossing", "mp_touching",
-                          "mp_depth_rounding", "mp_sampling",     "mp_edge_on",        "mp_untested", "mp_unexplained",
-                          "false_positives",   "efficiency",      "attribution_ms"})
-        j[k] = nullptr;
-    j["exact_switch"] = c.exactSwitch;
-    j["switched_at_level"] = r.switchedAtLevel >= 0 ? nlohmann::ordered_json(r.switchedAtLevel) : nullptr;
-    j["exact_ms"] = nullptr;
-    j["time_to_exact_ms"] = nullptr;
-    if (truth) {
-        // The exact stage on the median run's PCS (the oracle restricted to its triangles), timed
-        // like the runs: the pipeline's time to its exact pairs.
-        std::vector<double> exact;
-        for (int k = 0; k < repeats; ++k)
-            executeIn(*arena, [&] { exact.push_back(oracle::exactStage(scene, r.pcs).totalSeconds); });
-        std::sort(exact.begin(), exact.end());
-        j["exact_ms"] = 1e3 * exact[exact.size() / 2];
-        j["time_to_exact_ms"] = 1e3 * (median + exact[exact.size() / 2]);
-        const PcsReport rep = measurePcs(scene, *truth, r.pcs, options);
-        const auto start = Clock::now();
-        Attribution a;
-        // The median timed run itself is explained, from the calls that pruned its triangles (so
-        // an auto switch, which depends on timings, needs no replay).
-        executeIn(*arena, [&] { a = attributeFalsePrunes(scene, *truth, backend, options, r); });
-        j["attribution_ms"] = 1e3 * secondsSince(start);
-        const bool same = a.result.pcs == r.pcs;
-        const size_t missed = rep.missedPairs[0] + rep.missedPairs[1];
-        size_t attributedPairs = 0, attributedTriangles = 0;
-        for (int k = 0; k < kCauseCount; ++k)
-            attributedPairs += a.pairs[size_t(k)], attributedTriangles += a.triangles[size_t(k)];
-        if (!same || attributedPairs != missed || attributedTriangles != rep.falsePruneCount()) {
-            a.pairs = {}, a.triangles = {};
-            a.pairs[size_t(Cause::Unexplained)] = missed;
-            a.triangles[size_t(Cause::Unexplained)] = rep.falsePruneCount();
-        }
-        j["oracle_pairs"] = truth->pairs.size();
-        j["oracle_crossing"] = truth->count(oracle::PairClass::Crossing);
-        j["oracle_touching"] = truth->count(oracle::PairClass::Touching);
-        j["colliding"] = rep.collidingTriangles;
-        j["false_prunes"] = rep.falsePruneCount();
-        j["fp_crossing"] = rep.falsePrunes[0];
-        j["fp_touching"] = rep.falsePrunes[1];
-        j["missed_pairs"] = missed;
-        j["mp_crossing"] = rep.missedPairs[0];
-        j["mp_touching"] = rep.missedPairs[1];
-        for (int k = 0; k < kCauseCount; ++k) {
-            j[std::string("fp_") + toString(Cause(k))] = a.triangles[size_t(k)];
-            j[std::string("mp_") + toString(Cause(k))] = a.pairs[size_t(k)];
-        }
-        j["false_positives"] = rep.falsePositives;
-        j["efficiency"] = rep.efficiency;
-    }
-    j["backend_description"] = backend.describe();
-    nlohmann::ordered_json passes = nlohmann::ordered_json::array();
-    for (const PassStats& p : r.passes) passes.push_back(passJson(p, options));
-    j["passes"] = passes;
-    // Not a column of the CSV; like the timings, it differs between runs of one configuration.
-    std::vector<std::string> drivers;
-    if (c.backend != "cpu") drivers.push_back(backend.describe());
-    j["provenance"] = toJson(provenance(c.threads, drivers));
-    return j;
 }
 
 const std::vector<std::string>& columns() {
@@ -525,6 +404,11 @@ const std::vector<std::string>& columns() {
         std::vector<std::string> v = c;
         for (const char* k : {"exact_switch", "switched_at_level", "exact_ms", "time_to_exact_ms"}) v.push_back(k);
         for (const char* k : {"near_distance", "near_contacts", "near_contacts_self"}) v.push_back(k);
+        // Every family's measure (methods.h): after the others, so an older CSV's columns stay a prefix.
+        for (const char* k : {"family", "time_to_pairs_ms", "pairs_found", "pairs_missed", "pairs_spurious", "tolerance"})
+            v.push_back(k);
+        for (oracle::AuditCause a : oracle::missedCauses()) v.push_back(std::string("missed_") + toString(a));
+        for (oracle::AuditCause a : oracle::spuriousCauses()) v.push_back(std::string("spurious_") + toString(a));
         return v;
     }();
     return all;
@@ -647,6 +531,7 @@ size_t runStudy(const StudyOptions& opt) {
     std::string diagonalScene;  // the scene whose first frame's diagonal `diagonal` is
     double diagonal = 0;
     std::map<std::pair<std::string, int>, std::unique_ptr<DepthBackend>> backends;
+    PairRuns pairRuns;
     Progress bar("study", todo.size(), "runs", opt.progress);
     for (size_t i = 0; i < todo.size(); ++i) {
         const RunConfig& c = todo[i];
@@ -657,18 +542,21 @@ size_t runStudy(const StudyOptions& opt) {
             scene = loadStudyScene(c.scene, c.frame);
             truth.reset();
             if (opt.spec.oracle) truth = std::make_unique<oracle::Truth>(oracle::findIntersections(scene));
-            if (truth && opt.spec.nearDistance > 0) {
-                // One distance for every frame of a scene: a fraction of its first frame's diagonal,
-                // found once per scene (its frames come in a row).
-                if (c.scene != diagonalScene)
-                    diagonal = sceneDiagonal(c.frame == 0 ? scene : loadStudyScene(c.scene, 0)), diagonalScene = c.scene;
-                near = measureNear(scene, *truth, opt.spec.nearDistance * diagonal);
-            }
+            // One near distance and one tolerance for every frame of a scene: fractions of its first
+            // frame's diagonal, found once per scene (its frames come in a row).
+            if (truth && c.scene != diagonalScene)
+                diagonal = sceneDiagonal(c.frame == 0 ? scene : loadStudyScene(c.scene, 0)), diagonalScene = c.scene;
+            if (truth && opt.spec.nearDistance > 0) near = measureNear(scene, *truth, opt.spec.nearDistance * diagonal);
             sceneKey = key;
         }
-        auto& backend = backends[{c.backend, c.threads}];
-        if (!backend) backend = raster::makeBackend(c.backend, c.threads);
-        nlohmann::ordered_json r = runOne(c, scene, truth.get(), opt.spec.repeats, *backend);
+        nlohmann::ordered_json r;
+        if (methodFamily(c.method, opt.spec.names.method) == MethodFamily::ImageSpace) {
+            auto& backend = backends[{c.backend, c.threads}];
+            if (!backend) backend = raster::makeBackend(c.backend, c.threads);
+            r = runOne(c, scene, truth.get(), opt.spec.repeats, *backend);
+        } else {
+            r = pairRuns.run(c, scene, truth.get(), opt.spec.tolerance * diagonal, opt.spec.repeats);
+        }
         addNear(r, truth && opt.spec.nearDistance > 0 ? &near : nullptr);
         if (!opt.command.empty()) r["command"] = opt.command;
         append(csv, paths.csv, csvRow(r));

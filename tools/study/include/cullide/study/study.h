@@ -28,6 +28,7 @@
 #include "cullide/oracle/oracle.h"
 #include "cullide/scene.h"
 #include "cullide/pipeline/progress.h"
+#include "cullide/study/methods.h"
 
 #include <nlohmann/json.hpp>
 
@@ -63,6 +64,9 @@ struct Spec {
     // fraction of the scene's bounding-box diagonal at its first frame (the same distance in every
     // frame of an animation); 0: not counted (needs the oracle).
     double nearDistance = 0;
+    // The audit's tolerance for the pairs of the exact method and the peers (cullide/oracle/audit.h):
+    // a fraction of the scene's bounding-box diagonal at its first frame, as the near distance.
+    double tolerance = kDefaultTolerance;
     // Each axis' name in errors: its spec key, or the command-line option that set it.
     OptionNames names = specOptionNames("study spec");
     // What errors about the whole sweep name: the spec file it was read from.
@@ -72,7 +76,7 @@ struct Spec {
 // Reads a JSON spec: {"scenes": [...], "methods": [...], "resolutions": [...], "depths": [...],
 // "directions": [...], "views": [...], "hierarchies": [...], "leaf_sizes": [...], "exact_switches": [...],
 // "backends": [...],
-// "threads": [...], "branching": B, "seed": S, "repeats": K, "near_distance": F, "oracle": true}. Scalars are accepted
+// "threads": [...], "branching": B, "seed": S, "repeats": K, "near_distance": F, "tolerance": F, "oracle": true}. Scalars are accepted
 // where lists are expected, and a list of one where a scalar is. Every field is checked here,
 // before anything runs: an unknown key, an empty list, a wrong type or a value out of range is an
 // InputError(source, "field 'KEY': ...") (spec.cpp).
@@ -96,10 +100,14 @@ struct RunConfig {
     uint32_t leafSize = 16, branching = 4;
     uint64_t seed = 1;
     double nearDistance = 0;  // the spec's: part of the key when not 0
+    double tolerance = kDefaultTolerance;  // the spec's: part of a pair method's key when not the default
     std::string exactSwitch = "never";
     std::string backend;
     int threads = 0;
 
+    // The exact method and the peers have no image-space axes: empty strings, leaf size and
+    // branching 0 (so that their keys name only what they depend on).
+    void clearImageAxes();
     std::string key() const;
     std::string id() const;
 };
