@@ -1,6 +1,7 @@
 // FCL 0.7 as its documentation uses it for meshes: a BVHModel<OBBRSS> per object (the bounding
-// volume of FCL's own mesh examples and benchmarks: an oriented box and a swept sphere, so a
-// model moved by a new transform keeps its tree), refitted bottom-up when its positions change
+// volume of FCL's own mesh examples and benchmarks; oriented, so collide works on it in place
+// under any transform, where for AABB models it copies both and moves them into the world on
+// every call), refitted bottom-up when its positions change
 // (beginReplaceModel / replaceSubModel / endReplaceModel), a new transform when only its pose
 // changes, and a DynamicAABBTreeCollisionManager over the objects whose callback runs
 // fcl::collide with room for every contact. FCL tests objects against each other only (its
@@ -57,12 +58,11 @@ bool collideObjects(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* 
     fcl::collide(o1, o2, context.request, result);
     const uint32_t a = uint32_t(reinterpret_cast<uintptr_t>(o1->getUserData()));
     const uint32_t b = uint32_t(reinterpret_cast<uintptr_t>(o2->getUserData()));
+    // Between two meshes FCL never swaps the objects: b1 is a triangle of o1, b2 of o2 (Contact's
+    // o1 may be a copy of o1's model, for bounding volumes that are not oriented).
     for (size_t k = 0; k < result.numContacts(); ++k) {
         const fcl::Contactd& c = result.getContact(k);
-        // Contact's o1 is the geometry of collide's first object.
-        const bool straight = c.o1 == o1->collisionGeometry().get();
-        context.pairs.push_back(
-            TrianglePair::make({a, uint32_t(straight ? c.b1 : c.b2)}, {b, uint32_t(straight ? c.b2 : c.b1)}));
+        context.pairs.push_back(TrianglePair::make({a, uint32_t(c.b1)}, {b, uint32_t(c.b2)}));
     }
     return false;  // never done: every pair of objects
 }
