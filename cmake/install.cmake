@@ -1,16 +1,16 @@
 # `cmake --install build --prefix P`: the `cullide` command, the static libraries and their public
 # headers, share/cullide/ (data/ and tools/ as in the source tree: the installed command finds them
 # beside itself, core's resources.h), a CMake package (find_package(cullide 0.3) gives cullide::core,
-# cullide::raster, cullide::raster_verify, cullide::oracle, cullide::pipeline, cullide::study) and a
+# cullide::raster, cullide::raster_verify, cullide::oracle, cullide::peers, cullide::pipeline, cullide::study) and a
 # pkg-config file.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 set(CULLIDE_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/cullide)
-install(TARGETS cullide_core cullide_raster cullide_raster_verify cullide_oracle cullide_pipeline cullide_study
+install(TARGETS cullide_core cullide_raster cullide_raster_verify cullide_oracle cullide_peers cullide_pipeline cullide_study
         EXPORT cullideTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS cullide RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-install(DIRECTORY core/include/ raster/include/ raster/verify/include/ oracle/include/ tools/pipeline/include/
+install(DIRECTORY core/include/ raster/include/ raster/verify/include/ oracle/include/ peers/include/ tools/pipeline/include/
                   tools/study/include/
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(DIRECTORY data/ DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/data)

@@ -54,22 +54,35 @@ std::string shortName(const fs::path& p) {
 // Trap: a file that grows past one job. The limit is the one docs/layout.md states; a file over
 // it is named with its length.
 TEST(Layout, NoSourceFileOver700Lines) {
-    const auto all = sources({"core", "raster", "oracle", "tools", "python", "tests", "bench"});
+    const auto all = sources({"core", "raster", "oracle", "peers", "tools", "python", "tests", "bench"});
     ASSERT_GT(all.size(), 100u) << "the source tree was not found at " << kRoot;
     for (const fs::path& p : all) EXPECT_LE(linesOf(p).size(), 700u) << shortName(p);
 }
 
-// Trap: an arrow that runs back up. core must not include raster, oracle, the pipeline or the
-// study; the rasterizer must not include its verification harness or the oracle.
+// Trap: an arrow that runs back up. core must not include raster, oracle, peers, the pipeline or
+// the study; the rasterizer must not include its verification harness or the oracle; raster,
+// oracle and peers stand on core only, never on each other.
 TEST(Layout, IncludesPointOneWay) {
     for (const fs::path& p : sources({"core"}))
-        EXPECT_TRUE(includesOf(p, {"cullide/raster/", "cullide/oracle/", "cullide/pipeline/", "cullide/study/"}).empty())
+        EXPECT_TRUE(
+            includesOf(p,
+                       {"cullide/raster/", "cullide/oracle/", "cullide/peers/", "cullide/pipeline/", "cullide/study/"})
+                .empty())
             << shortName(p);
     for (const fs::path& p : sources({"raster/src", "raster/include", "raster/gpu", "raster/gl", "raster/vulkan"}))
-        EXPECT_TRUE(includesOf(p, {"cullide/raster/trace.h", "cullide/raster/validate.h", "cullide/oracle/"}).empty())
+        EXPECT_TRUE(
+            includesOf(p, {"cullide/raster/trace.h", "cullide/raster/validate.h", "cullide/oracle/", "cullide/peers/"})
+                .empty())
             << shortName(p);
     for (const fs::path& p : sources({"oracle"}))
-        EXPECT_TRUE(includesOf(p, {"cullide/raster/", "cullide/cullide.h", "cullide/pipeline/"}).empty())
+        EXPECT_TRUE(
+            includesOf(p, {"cullide/raster/", "cullide/cullide.h", "cullide/peers/", "cullide/pipeline/"}).empty())
+            << shortName(p);
+    for (const fs::path& p : sources({"peers"}))
+        EXPECT_TRUE(
+            includesOf(
+                p, {"cullide/raster/", "cullide/cullide.h", "cullide/oracle/", "cullide/pipeline/", "cullide/study/"})
+                .empty())
             << shortName(p);
 }
 

@@ -13,6 +13,8 @@ packages=(
   libeigen3-dev libtbb-dev
   # oracle: Embree 3 broad phase, CGAL exact predicates (header-only, needs GMP/MPFR, Boost)
   libembree-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  # peers: the collision libraries the study compares with (FCL 0.7, Bullet 3.24's GImpact)
+  libfcl-dev libbullet-dev
   # tests, benchmarks, command line, scene files, mesh input/output, PNG writer
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libtinyobjloader-dev libmeshoptimizer-dev
   libstb-dev
