@@ -17,7 +17,7 @@ namespace {
 const std::vector<std::string> kCommands = {
     "info",        "make-scene",   "prune",         "oracle",     "validate", "trace record",
     "trace replay", "trace compare", "trace info", "study",      "study merge", "plot",
-    "report",      "tune",
+    "report",      "tune",        "audit",
 };
 
 std::string cliPath() { return std::string(CULLIDE_SOURCE_DIR) + "/docs/cli.md"; }

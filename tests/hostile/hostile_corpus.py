@@ -324,6 +324,29 @@ def csv_cases(d):
     return cases
 
 
+def audit_cases(d):
+    """Pair lists for `cullide audit` (on the scene trace_cases writes, pair.json)."""
+    header = "frame,object_a,triangle_a,object_b,triangle_b\n"
+    write(d, "nested_pairs.json", '{"frames": ' + deep(100000) + "}")
+    write(d, "garbage_pairs.csv", b"\x00\x01\x02\xff\xfe" * 20, mode="wb")
+    write(d, "wide_pairs.csv", header + "0,0,4294967296,1,0\n")
+    write(d, "many_pairs.csv", header + "0,0,0,1,0\n" * 1000000)
+    write(d, "many_frames.json", '{"frames": [' + ",".join(['{"pairs": []}'] * 100000) + "]}")
+    os.mkfifo(os.path.join(d, "fifo_pairs.csv"))
+    return [
+        Case("audit: pairs nested 10^5 deep", ["audit", "pair.json", "nested_pairs.json"], names=["nested_pairs.json", "deep"]),
+        Case("audit: binary garbage", ["audit", "pair.json", "garbage_pairs.csv"], names=["garbage_pairs.csv", "line 1"]),
+        Case("audit: a triangle index of 2^32", ["audit", "pair.json", "wide_pairs.csv"],
+             names=["wide_pairs.csv", "line 2"]),
+        Case("audit: 10^6 copies of one pair in time", ["audit", "pair.json", "many_pairs.csv"], rc={0, 1}),
+        Case("audit: 10^5 frames for a still scene", ["audit", "pair.json", "many_frames.json"],
+             names=["many_frames.json", "frame 1"]),
+        Case("audit: a FIFO", ["audit", "pair.json", "fifo_pairs.csv"], names=["fifo_pairs.csv", "FIFO"]),
+        Case("audit: --json into a missing folder", ["audit", "pair.json", "many_frames.json", "--frame", "0",
+                                                     "--json", "nowhere/a.json"], names=["nowhere/a.json"]),
+    ]
+
+
 def python_cases(d):
     """The Python module's own refusals (ValueError naming the cause), when it can be imported."""
     code = r"""
@@ -393,7 +416,7 @@ def main():
     d = args.keep or tempfile.mkdtemp(prefix="cullide-hostile-")
     os.makedirs(d, exist_ok=True)
     cases = mesh_cases(d) + scene_cases(d) + positions_cases(d) + trace_cases(d, cullide) + spec_cases(d) + option_cases(d) + \
-        output_cases(d) + csv_cases(d)
+        output_cases(d) + csv_cases(d) + audit_cases(d)
     failed = 0
     for case in cases:
         if args.k and args.k not in case.name:

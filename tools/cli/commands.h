@@ -51,5 +51,6 @@ void addPlotCommand(CLI::App& app, Action& action);
 void addTraceCommand(CLI::App& app, Action& action);
 void addReportCommand(CLI::App& app, Action& action);
 void addTuneCommand(CLI::App& app, Action& action);
+void addAuditCommand(CLI::App& app, Action& action);
 
 }  // namespace cullide::cli

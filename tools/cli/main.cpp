@@ -81,6 +81,7 @@ int run(int argc, char** argv) {
     cullide::cli::addTraceCommand(app, action);
     cullide::cli::addReportCommand(app, action);
     cullide::cli::addTuneCommand(app, action);
+    cullide::cli::addAuditCommand(app, action);
 
     try {
         app.parse(argc, argv);

@@ -63,8 +63,10 @@ struct AuditedPair {
     TrianglePair pair;
     PairClass cls = PairClass::Crossing;  // missed: the truth's class; spurious: unused
     AuditCause cause = AuditCause::Unexplained;
-    // Missed crossing pairs: the penetration depth; spurious pairs: the distance between the two
-    // triangles (double; 0 when they touch in float but not exactly). Otherwise 0.
+    // Missed crossing pairs: the penetration depth (the shortest translation that parts them, by
+    // the separating-axis theorem); spurious pairs: the distance between the two triangles
+    // (double; 0 when they touch in float but not exactly, and for a degenerate triangle).
+    // Otherwise 0.
     double distance = 0;
 };
 
