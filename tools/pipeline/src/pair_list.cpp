@@ -159,7 +159,9 @@ std::string PairList::where(const PairListFrame& f, size_t k) const {
 PairList parsePairList(std::string_view text, const std::string& source) {
     PairList list;
     list.source = source;
-    checkJsonSize(text.size(), source, kPairListJson);
+    if (text.size() > kMaxPairListBytes)
+        throw InputError(source, std::to_string(text.size()) + " bytes, over the limit of " +
+                                     std::to_string(kMaxPairListBytes) + " bytes for a pair list");
     list.format = looksLikeJson(text) ? PairListFormat::Json : PairListFormat::Csv;
     if (list.format == PairListFormat::Json) parseJsonList(text, list);
     else parseCsvList(text, list);
