@@ -47,6 +47,7 @@ TrianglePair pairOf(uint32_t oa, uint32_t ta, uint32_t ob, uint32_t tb) {
 //   2, 3: coplanar overlap (touching); 4, 5: a corner on a face (touching)
 //   6, 7: crossing 1e-4 deep; 8, 9: crossing 0.25 deep
 //   10: a degenerate triangle and a good one; 12, 13: coplanar, 1e-4 apart; 14, 15: 1e-4 apart
+//   16, 17: two faces of a thin solid, 0.5 apart, facing away from each other (each behind the other)
 Scene auditScene() {
     std::vector<Mesh> m;
     m.push_back(meshOf({{0, 0, 0}, {1, 0, 0}, {0.5f, 1, 0}, {0.5f, 0.5f, 0}, {1, 1, 1}}, {{0, 1, 2}, {0, 1, 3}, {1, 2, 4}}));
@@ -65,6 +66,8 @@ Scene auditScene() {
     m.push_back(tri({72.0001f, 0, 0}, {74, 0, 0}, {72.0001f, 2, 0}));
     m.push_back(floorAt(80));
     m.push_back(tri({80.5f, 0.5f, 1e-4f}, {81, 0.5f, 1}, {80.5f, 1, 1}));
+    m.push_back(floorAt(90));
+    m.push_back(tri({90.5f, 0.5f, -0.5f}, {90.5f, 1, -0.5f}, {91, 0.5f, -0.5f}));
     return sceneOf(std::move(m));
 }
 
@@ -107,7 +110,8 @@ TEST(Audit, RemovedAndAddedPairsReportedWithTheirCauses) {
     const Scene s = auditScene();
     const Truth t = findIntersections(s);
     const std::vector<TrianglePair> list = {pairOf(0, 0, 0, 2),   pairOf(0, 1, 0, 2),   pairOf(10, 0, 10, 1),
-                                            pairOf(12, 0, 13, 0), pairOf(14, 0, 15, 0), pairOf(2, 0, 11, 0)};
+                                            pairOf(12, 0, 13, 0), pairOf(14, 0, 15, 0), pairOf(2, 0, 11, 0),
+                                            pairOf(16, 0, 17, 0)};
     const Audit a = audit(s, t, list, withTolerance(1e-3));
     EXPECT_EQ(a.found, 0u);
     const std::vector<std::pair<TrianglePair, AuditCause>> missed = {
@@ -125,7 +129,8 @@ TEST(Audit, RemovedAndAddedPairsReportedWithTheirCauses) {
     const std::vector<std::pair<TrianglePair, AuditCause>> spurious = {
         {pairOf(0, 0, 0, 2), AuditCause::SharedEdge},   {pairOf(0, 1, 0, 2), AuditCause::SharedVertex},
         {pairOf(2, 0, 11, 0), AuditCause::Unexplained}, {pairOf(10, 0, 10, 1), AuditCause::Degenerate},
-        {pairOf(12, 0, 13, 0), AuditCause::Coplanar},   {pairOf(14, 0, 15, 0), AuditCause::WithinTolerance}};
+        {pairOf(12, 0, 13, 0), AuditCause::Coplanar},   {pairOf(14, 0, 15, 0), AuditCause::WithinTolerance},
+        {pairOf(16, 0, 17, 0), AuditCause::BehindFace}};
     ASSERT_EQ(a.spurious.size(), spurious.size());
     for (size_t i = 0; i < spurious.size(); ++i) {
         EXPECT_EQ(a.spurious[i].pair, spurious[i].first) << i;

@@ -39,7 +39,9 @@ TEST(StudyMethods, PairMethodsRunOncePerFrameAndThreadCount) {
     EXPECT_EQ(perMethod["embree"], 2u);
     EXPECT_EQ(ids.size(), runs.size());
     for (const RunConfig& c : runs)
-        if (c.method != "modified") EXPECT_TRUE(c.resolution.empty() && c.backend.empty()) << c.key();
+        if (c.method != "modified") {
+            EXPECT_TRUE(c.resolution.empty() && c.backend.empty()) << c.key();
+        }
     // The tolerance is part of a pair method's key only (image-space rows do not use it).
     Spec t = s;
     t.tolerance = 1e-4;
@@ -96,9 +98,12 @@ TEST(StudyMethods, EveryFamilyFillsTheSameMeasures) {
         size_t missed = 0;
         for (oracle::AuditCause c : oracle::missedCauses()) missed += r[std::string("missed_") + toString(c)].get<size_t>();
         EXPECT_EQ(missed, r["pairs_missed"].get<size_t>());
-        if (r["family"] == "exact") EXPECT_EQ(r["pairs_missed"], 0);
-        if (r["method"] == "fcl" || r["method"] == "bullet")  // between objects only: the 101 self pairs untested
+        if (r["family"] == "exact") {
+            EXPECT_EQ(r["pairs_missed"], 0);
+        }
+        if (r["method"] == "fcl" || r["method"] == "bullet") {  // between objects only: the 101 self pairs untested
             EXPECT_EQ(r["missed_untested"], 101);
+        }
     }
     const std::string csv = test::readBytes(o.out);
     EXPECT_NE(csv.find(",family,time_to_pairs_ms,pairs_found,pairs_missed,pairs_spurious,tolerance,"), std::string::npos);

@@ -96,6 +96,7 @@ AuditedPair explainSpurious(const TrianglePair& p, const Truth& truth, PairGeome
     else if (shared == 1) out.cause = AuditCause::SharedVertex;
     else if (near && detail::coplanar(a, b)) out.cause = AuditCause::Coplanar;
     else if (near) out.cause = AuditCause::WithinTolerance;
+    else if (shared == 0 && detail::behindFace(a, b) && detail::behindFace(b, a)) out.cause = AuditCause::BehindFace;
     return out;
 }
 
@@ -110,6 +111,7 @@ const char* toString(AuditCause c) {
         case AuditCause::Coplanar: return "coplanar";
         case AuditCause::Touching: return "touching";
         case AuditCause::WithinTolerance: return "within_tolerance";
+        case AuditCause::BehindFace: return "behind_face";
         case AuditCause::Unexplained: return "unexplained";
     }
     return "unexplained";
@@ -126,7 +128,8 @@ const std::vector<AuditCause>& missedCauses() {
 const std::vector<AuditCause>& spuriousCauses() {
     static const std::vector<AuditCause> causes = {AuditCause::Degenerate,   AuditCause::SharedEdge,
                                                    AuditCause::SharedVertex, AuditCause::Coplanar,
-                                                   AuditCause::WithinTolerance, AuditCause::Unexplained};
+                                                   AuditCause::WithinTolerance, AuditCause::BehindFace,
+                                                   AuditCause::Unexplained};
     return causes;
 }
 

@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace cullide::oracle::detail {
 namespace {
@@ -61,6 +62,29 @@ double penetrationDepth(const TrianglePoints& a, const TrianglePoints& b) {
     for (const Vec3d& axis : axes)
         if (axis.squaredNorm() > 0) depth = std::min(depth, overlapAlong(a, b, axis));
     return std::isfinite(depth) ? std::max(depth, 0.0) : 0.0;
+}
+
+bool behindFace(const TrianglePoints& a, const TrianglePoints& b) {
+    const Vec3d n = (a[1] - a[0]).cross(a[2] - a[0]);
+    if (!(n.squaredNorm() > 0)) return false;
+    // b as a polygon, clipped by the three half-spaces inside a's edges (Sutherland-Hodgman).
+    std::vector<Vec3d> poly(b.begin(), b.end()), next;
+    for (int i = 0; i < 3 && !poly.empty(); ++i) {
+        const Vec3d& p0 = a[i];
+        const Vec3d inward = n.cross(a[(i + 1) % 3] - p0);  // points into a, in a's plane
+        next.clear();
+        for (size_t k = 0; k < poly.size(); ++k) {
+            const Vec3d& u = poly[k];
+            const Vec3d& v = poly[(k + 1) % poly.size()];
+            const double du = inward.dot(u - p0), dv = inward.dot(v - p0);
+            if (du >= 0) next.push_back(u);
+            if ((du < 0) != (dv < 0)) next.push_back(u + (v - u) * (du / (du - dv)));
+        }
+        poly.swap(next);
+    }
+    for (const Vec3d& p : poly)
+        if (n.dot(p - a[0]) < 0) return true;
+    return false;
 }
 
 }  // namespace cullide::oracle::detail

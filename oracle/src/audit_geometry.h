@@ -22,4 +22,9 @@ bool coplanar(const TrianglePoints& a, const TrianglePoints& b);
 // non-degenerate): for coplanar ones the in-plane edge normals would be needed too.
 double penetrationDepth(const TrianglePoints& a, const TrianglePoints& b);
 
+// Whether a part of `b` lies inside the prism over `a` (bounded by the planes through a's edges
+// along its normal) and strictly behind a's plane (the side away from the normal of a's corners in
+// their order). In double: an explanation, not a decision. `a` non-degenerate.
+bool behindFace(const TrianglePoints& a, const TrianglePoints& b);
+
 }  // namespace cullide::oracle::detail

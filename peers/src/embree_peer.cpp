@@ -3,8 +3,9 @@
 // RTC_BUILD_QUALITY_LOW with RTC_SCENE_FLAG_DYNAMIC, and on later frames the changed geometries
 // committed again and the scene with them; rtcCollide(scene, scene) gives the box pairs within
 // and between objects, and the callback keeps those the tutorial's float triangle test accepts
-// (it skips two triangles of one object that share a vertex, and counts planes within 1e-5 of
-// each other as touching). Embree builds and collides on TBB, in the caller's task_arena.
+// (it skips two triangles of one object that share a vertex, and counts corners within a
+// tolerance of the other's plane as on it: the tutorial's 1e-5, made relative to the pair's size,
+// see trianglesIntersect). Embree builds and collides on TBB, in the caller's task_arena.
 #include "cullide/parallel.h"
 #include "frames.h"
 #include "peer_makers.h"
@@ -72,9 +73,25 @@ Interval onLine(const float (&p)[3], const float (&d)[3]) {
     return out;
 }
 
+// The longest edge of the two triangles.
+float pairSize(const Vec3f (&a)[3], const Vec3f (&b)[3]) {
+    float size = 0;
+    for (int i = 0; i < 3; ++i)
+        size = std::max({size, (a[(i + 1) % 3] - a[i]).norm(), (b[(i + 1) % 3] - b[i]).norm()});
+    return size;
+}
+
 bool trianglesIntersect(const Vec3f (&a)[3], const Vec3f (&b)[3]) {
-    constexpr float eps = 1e-5f;  // the tutorial's, in the units of the unnormalised plane equations
-    const Vec3f na = (a[1] - a[0]).cross(a[2] - a[0]), nb = (b[1] - b[0]).cross(b[2] - b[0]);
+    // The tutorial's tolerance is 1e-5 in the units of its unnormalised plane equations, made for
+    // its cloth of triangles about a unit across. Taken as written it is absolute, so on a mesh a
+    // few hundredths across (the bundled bunny) nearly every pair of nearby triangles falls within
+    // it and counts as coplanar: ten times the true pairs. Here the planes are normalised and the
+    // tolerance is 1e-5 of the pair's longest edge, the tutorial's test at any scale.
+    Vec3f na = (a[1] - a[0]).cross(a[2] - a[0]), nb = (b[1] - b[0]).cross(b[2] - b[0]);
+    const float la = na.norm(), lb = nb.norm();
+    if (!(la > 0.0f) || !(lb > 0.0f)) return false;  // a degenerate triangle has no plane
+    na /= la, nb /= lb;
+    const float eps = 1e-5f * pairSize(a, b);
     const float ca = na.dot(a[0]), cb = nb.dot(b[0]);
     const float da[3] = {nb.dot(a[0]) - cb, nb.dot(a[1]) - cb, nb.dot(a[2]) - cb};
     if (std::max({da[0], da[1], da[2]}) < -eps || std::min({da[0], da[1], da[2]}) > eps) return false;

@@ -17,7 +17,11 @@
 //       spurious: Degenerate (either triangle is degenerate: the oracle pairs it with nothing);
 //                 SharedEdge, SharedVertex (neighbours that do not intersect under the sharing
 //                 rules, oracle.h); Coplanar (in one plane, and at most the tolerance apart);
-//                 WithinTolerance (at most the tolerance apart); Unexplained otherwise.
+//                 WithinTolerance (at most the tolerance apart); BehindFace (each has a part inside
+//                 the prism over the other and behind its plane, the side its normal, by the
+//                 corners' winding, points away from: a detector that takes each triangle for
+//                 the face of a solid, as Bullet's GImpact does, counts that as penetration,
+//                 however far apart they are); Unexplained otherwise.
 //     Unexplained is a bug of the list's maker, or of the oracle: 0 for every peer we wrap.
 //   - Errors: InputError(source, ...) for a pair naming a triangle the scene does not have, or a
 //     triangle paired with itself.
@@ -42,11 +46,12 @@ enum class AuditCause : uint8_t {
     Coplanar,
     Touching,
     WithinTolerance,
+    BehindFace,
     Unexplained,
 };
-inline constexpr int kAuditCauseCount = 8;
+inline constexpr int kAuditCauseCount = 9;
 // "untested" | "degenerate" | "shared_edge" | "shared_vertex" | "coplanar" | "touching" |
-// "within_tolerance" | "unexplained"
+// "within_tolerance" | "behind_face" | "unexplained"
 const char* toString(AuditCause c);
 // The causes a missed pair can have, and a spurious one, in the order above (the study's columns
 // missed_<cause> and spurious_<cause>).
