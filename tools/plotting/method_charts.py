@@ -113,8 +113,11 @@ def _accuracy_axis(ax, values, label):
 def methods_chart(rows, out):
     """Per scene (a column), time to exact pairs per frame (log) against the pairs missed (top) and
     the spurious pairs (bottom), as % of the oracle's pairs, every method of every family."""
-    rows = [r for r in rows if num(r.get("oracle_pairs")) is not None]
     if not has_method_columns(rows, "methods"):
+        return None
+    rows = [r for r in rows if num(r.get("oracle_pairs")) is not None and num(r.get("time_to_pairs_ms")) is not None]
+    if not rows:
+        print("methods: no run was judged by the oracle (--no-oracle): not drawn", file=sys.stderr)
         return None
     by_scene = summaries(rows)
     style = Style(rows)
