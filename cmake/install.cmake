@@ -18,6 +18,16 @@ install(PROGRAMS tools/plot.py DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/tool
 install(DIRECTORY tools/plotting DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/tools  # the package plot.py runs
         FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
 install(PROGRAMS tools/trace/replay_reference.py DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/tools/trace)
+# The report's 3D view (plotting/view3d.py): its module, and the three.js files it inlines where
+# tools/setup.sh installed them (npm ci in tools/report3d).
+set(CULLIDE_THREE tools/report3d/node_modules/three)
+install(FILES tools/report3d/view.js tools/report3d/package.json tools/report3d/package-lock.json
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/tools/report3d)
+install(FILES ${CULLIDE_THREE}/build/three.module.min.js ${CULLIDE_THREE}/build/three.core.min.js
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/${CULLIDE_THREE}/build OPTIONAL)
+install(FILES ${CULLIDE_THREE}/LICENSE DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/${CULLIDE_THREE} OPTIONAL)
+install(FILES ${CULLIDE_THREE}/examples/jsm/controls/OrbitControls.js
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/cullide/${CULLIDE_THREE}/examples/jsm/controls OPTIONAL)
 install(FILES LICENSE README.md CHANGELOG.md CITATION.cff DESTINATION ${CMAKE_INSTALL_DOCDIR})
 
 install(EXPORT cullideTargets NAMESPACE cullide:: DESTINATION ${CULLIDE_CMAKE_DIR})

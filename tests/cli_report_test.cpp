@@ -50,7 +50,8 @@ const ReportRun& smallReport() {
 }
 
 // The elements of an HTML page, checked for balance: every element closed in order (void elements
-// excepted), text without a stray '<'. Returns "" or the first problem.
+// excepted), text without a stray '<' (the text of <style> and <script> is not markup). Returns ""
+// or the first problem.
 std::string checkWellFormed(const std::string& html) {
     static const std::vector<std::string> voids = {"meta", "img", "br", "hr", "link", "input", "col", "wbr"};
     std::vector<std::string> open;
@@ -75,10 +76,9 @@ std::string checkWellFormed(const std::string& html) {
         } else if (std::find(voids.begin(), voids.end(), name) == voids.end() && tag.back() != '/') {
             open.push_back(name);
         }
-        // The text of <style> is not markup.
-        if (!closing && name == "style") {
-            const size_t close = html.find("</style>", i);
-            if (close == std::string::npos) return "<style> not closed";
+        if (!closing && (name == "style" || name == "script")) {
+            const size_t close = html.find("</" + name + ">", i);
+            if (close == std::string::npos) return "<" + name + "> not closed";
             i = close;
         }
     }
@@ -104,6 +104,24 @@ size_t countOf(const std::string& text, const std::string& what) {
     size_t n = 0;
     for (size_t i = text.find(what); i != std::string::npos; i = text.find(what, i + 1)) ++n;
     return n;
+}
+
+// A study CSV with every method's columns (family, time_to_pairs_ms, pairs_missed, ...): the eight
+// methods of three families on a still scene and on four frames of an animated one.
+const std::string kEveryMethodStudy = std::string(CULLIDE_TEST_DATA_DIR) + "/study/every_method.csv";
+
+bool haveThreeJs() {
+    return fs::exists(fs::path(CULLIDE_SOURCE_DIR) / "tools/report3d/node_modules/three/build/three.module.min.js");
+}
+
+// The attribute `attr` of the first tag that has it after `from`, or "".
+std::string attributeAfter(const std::string& html, const std::string& from, const std::string& attr) {
+    const size_t at = html.find(from);
+    if (at == std::string::npos) return "";
+    const size_t end = html.find('>', at), key = html.find(" " + attr + "=\"", at);
+    if (key == std::string::npos || key > end) return "";
+    const size_t start = key + attr.size() + 3;
+    return html.substr(start, html.find('"', start) - start);
 }
 
 }  // namespace
@@ -232,4 +250,102 @@ TEST(Cli, PlotAndReportRefuseWhatIsNoStudy) {
     const CliRun cut = runCli("plot " + quote((d / "cut.csv").string()) + " -o " + quote((d / "out").string()));
     EXPECT_NE(cut.output.find("cut.csv: line 2 is cut"), std::string::npos) << cut.output;
     EXPECT_FALSE(fs::exists(d / "out")) << "something was drawn";
+}
+
+// A study from before the every-method columns: one run, the columns every run has.
+const char* const kOldStudy =
+    "index,scene,frame,triangles,method,time_ms,calls,pcs\n"
+    "0,bunny:1500,0,1500,modified,9.5,3,40\n";
+
+// Trap: the every-method charts drawn from a study without their columns (a crash, or peers drawn
+// at 0 ms), or not drawn from one with them; the image-space charts fed peer rows, whose PCS,
+// calls and false prunes are empty. A study with the columns gets `methods` and `frame_times`
+// beside the image-space charts; one without says each is not drawn, and still plots.
+TEST(Cli, PlotDrawsEveryMethodWhereTheColumnsAre) {
+    if (!haveMatplotlib()) GTEST_SKIP() << "no matplotlib for /usr/bin/python3";
+    const fs::path d = freshDir("plot_methods");
+    { std::ofstream(d / "old.csv") << kOldStudy; }
+    const CliRun r = runCli("plot " + quote(kEveryMethodStudy) + " " + quote((d / "old.csv").string()) + " -o " +
+                            quote((d / "fig").string()));
+    ASSERT_EQ(r.status, 0) << r.output;
+    for (const char* chart : {"methods", "frame_times", "speed_vs_accuracy", "frames"})
+        EXPECT_TRUE(fs::exists(d / "fig" / (std::string(chart) + ".png"))) << chart << ": " << r.output;
+    EXPECT_NE(r.output.find("methods: no time_to_pairs_ms in the study"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("frame_times: no time_to_pairs_ms in the study"), std::string::npos) << r.output;
+}
+
+// The report's 3D view: a frame's mesh, the oracle's pairs and an audit's missed and spurious
+// pairs, drawn by three.js inlined into the page. Traps: a module or script fetched from the web
+// (the page must work offline), three.js's second file (three.core) left unresolved so that
+// nothing draws, a WebGL canvas that stays blank, an audit naming a frame or triangle the scene
+// does not have accepted. Chromium draws WebGL with SwiftShader (no GPU); the view reads its
+// pixels back and says how many are not background.
+TEST(Cli, ReportShowsAFrameIn3D) {
+    if (!haveMatplotlib()) GTEST_SKIP() << "no matplotlib for /usr/bin/python3";
+    const bool required = std::getenv("CULLIDE_REQUIRE_CHROMIUM") != nullptr;
+    if (!haveThreeJs()) {
+        if (required) FAIL() << "no three.js in tools/report3d (tools/setup.sh installs it)";
+        GTEST_SKIP() << "no three.js: run tools/setup.sh (npm ci in tools/report3d)";
+    }
+    const fs::path d = freshDir("report_3d");
+    const std::string study = quote((d / "s.csv").string());
+    { std::ofstream(d / "s.csv") << kOldStudy; }
+    {
+        std::ofstream(d / "audit.json") << R"({"frames": [{"frame": 0, "found": 3, "missed": [{"pair": [0, 1, 0, 2],)"
+                                           R"( "class": "crossing", "cause": "shared_edge"}],)"
+                                           R"( "spurious": [[0, 7, 0, 900]]}]})";
+    }
+    const std::string view = " --view-scene bunny:1500 --view-audit " + quote((d / "audit.json").string());
+    const CliRun r = runCli("report " + study + view + " --view-method fcl -o " + quote((d / "page").string()));
+    ASSERT_EQ(r.status, 0) << r.output;
+    const std::string html = readAll(d / "page" / "report.html");
+    EXPECT_EQ(checkWellFormed(html), "");
+    for (const std::string& src : attributeValues(html, "src"))
+        EXPECT_EQ(src.rfind("data:", 0), 0u) << src.substr(0, 60);
+    for (const std::string& href : attributeValues(html, "href")) EXPECT_EQ(href.rfind('#', 0), 0u) << href;
+    for (const char* external : {"<link", "<iframe", "\"http:", "\"https:", "import(\"http", "from\"http"})
+        EXPECT_EQ(html.find(external), std::string::npos) << external;
+    const std::string mapTag = "<script type=\"importmap\">";
+    const size_t map = html.find(mapTag) + mapTag.size();
+    ASSERT_GT(map, mapTag.size()) << "no import map";
+    const nlohmann::json imports =
+        nlohmann::json::parse(html.substr(map, html.find("</script>", map) - map))["imports"];
+    EXPECT_EQ(imports.size(), 3u) << "three, its core and OrbitControls";
+    for (const auto& [name, url] : imports.items()) EXPECT_EQ(url.get<std::string>().rfind("data:", 0), 0u) << name;
+    EXPECT_EQ(attributeAfter(html, "<div class=\"view3d\"", "data-missed"), "1");
+    EXPECT_EQ(attributeAfter(html, "<div class=\"view3d\"", "data-spurious"), "1");
+
+    if (std::system("command -v chromium >/dev/null 2>&1") != 0) {
+        if (required) FAIL() << "no chromium (tools/setup.sh installs it)";
+        GTEST_SKIP() << "no chromium on PATH";
+    }
+    const CliRun dom = cullide::test::runCommand(
+        "( timeout 300 chromium --headless --no-sandbox --use-angle=swiftshader --enable-unsafe-swiftshader "
+        "--window-size=1200,1600 --virtual-time-budget=20000 --user-data-dir=" + quote((d / "profile").string()) +
+        " --dump-dom " + quote("file://" + (d / "page" / "report.html").string()) + " 2>/dev/null )");
+    ASSERT_EQ(dom.status, 0) << dom.output.substr(0, 2000);
+    EXPECT_EQ(attributeAfter(dom.output, "<div class=\"view3d\"", "data-view-state"), "drawn")
+        << dom.output.substr(dom.output.find("view3d"), 600);
+    const std::string pixels = attributeAfter(dom.output, "<div class=\"view3d\"", "data-view-pixels");
+    EXPECT_GT(std::atol(pixels.c_str()), 10000) << "a blank canvas: " << pixels;
+
+    // Refused by name before a page is written: a frame the scene lacks, an audit without the
+    // frame, an audit pair naming a triangle the scene lacks.
+    const std::string out = " -o " + quote((d / "bad").string());
+    CliRun bad = runCli("report " + study + view + " --view-frame 3" + out);
+    EXPECT_EQ(bad.status, 2) << bad.output;
+    EXPECT_NE(bad.output.find("option --view-frame: scene 'bunny:1500' has 1 frame(s), no frame 3"), std::string::npos)
+        << bad.output;
+    { std::ofstream(d / "other_frame.json") << R"({"frames": [{"frame": 4, "missed": [], "spurious": []}]})"; }
+    bad = runCli("report " + study + " --view-scene bunny:1500 --view-audit " +
+                 quote((d / "other_frame.json").string()) + out);
+    EXPECT_EQ(bad.status, 2) << bad.output;
+    EXPECT_NE(bad.output.find("other_frame.json: the audit has no frame 0"), std::string::npos) << bad.output;
+    { std::ofstream(d / "outside.json") << R"([{"frame": 0, "missed": [[0, 1, 0, 1500]], "spurious": []}])"; }
+    bad = runCli("report " + study + " --view-scene bunny:1500 --view-audit " + quote((d / "outside.json").string()) +
+                 out);
+    EXPECT_EQ(bad.status, 2) << bad.output;
+    EXPECT_NE(bad.output.find("outside.json: frame 0: missed[0]: names triangle 1500 of object 0"), std::string::npos)
+        << bad.output;
+    EXPECT_FALSE(fs::exists(d / "bad" / "report.html"));
 }

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs every Debian package cullide needs to build, test and plot.
+# Installs every Debian package cullide needs to build, test and plot, and three.js (npm) for the
+# 3D view of `cullide report` (tools/report3d: `npm ci`, the version its package-lock.json pins).
 #
 # Non-interactive and idempotent: packages already installed are left alone, and when nothing
 # is missing the script only checks (well under a second) and says so. Only Debian's archive is
@@ -36,6 +37,26 @@ packages=(
   slurm-wlm munge
 )
 
+# npm from Debian only where there is none (a newer one from elsewhere is kept).
+command -v npm >/dev/null 2>&1 || packages+=(npm)
+
+# three.js into tools/report3d/node_modules, unless the pinned version is already there.
+report3d() {
+  local dir want have
+  dir="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/report3d"
+  want=$(sed -n '/"node_modules\/three"/,/version/s/.*"version": *"\([^"]*\)".*/\1/p' "$dir/package-lock.json")
+  have=""
+  if [ -f "$dir/node_modules/three/package.json" ]; then
+    have=$(sed -n 's/^ *"version": *"\([^"]*\)".*/\1/p' "$dir/node_modules/three/package.json" | head -1)
+  fi
+  if [ -n "$want" ] && [ "$want" = "$have" ]; then
+    echo "setup: three.js $have already in tools/report3d/node_modules; nothing to do."
+    return
+  fi
+  echo "setup: npm ci in tools/report3d (three.js $want)"
+  (cd "$dir" && npm ci --omit=dev --no-audit --no-fund)
+}
+
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
@@ -45,6 +66,7 @@ done
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#packages[@]} Debian packages already installed; nothing to do."
+  report3d
   exit 0
 fi
 
@@ -60,4 +82,5 @@ echo "setup: installing ${#missing[@]} missing Debian packages: ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 $sudo apt-get update -qq
 $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+report3d
 echo "setup: done."

@@ -35,11 +35,11 @@ def plot(inputs, out, method):
     return 0
 
 
-def report(inputs, out, method):
+def report(inputs, out, method, view=None):
     rows = read_report_inputs(inputs)
     charts(method)
     from .report import write_report
-    return write_report(rows, inputs, out)
+    return write_report(rows, inputs, out, view)
 
 
 def main():
@@ -48,9 +48,15 @@ def main():
     ap.add_argument("-o", "--out", default="figures")
     ap.add_argument("--method", help="method of the per-call charts (Figures 9-11; default: modified)")
     ap.add_argument("--report", action="store_true", help="write OUT/report.html instead of the charts")
+    ap.add_argument("--view", help="the report's 3D view: a frame written by `cullide report --view-scene`")
+    ap.add_argument("--view-audit", help="the 3D view's missed and spurious pairs: `cullide audit --json` output")
+    ap.add_argument("--view-method", help="the name of the audited method, for the 3D view's captions")
     a = ap.parse_args()
     try:
-        return (report if a.report else plot)(a.inputs, a.out, a.method)
+        if a.report:
+            view = {"frame": a.view, "audit": a.view_audit, "method": a.view_method}
+            return report(a.inputs, a.out, a.method, view)
+        return plot(a.inputs, a.out, a.method)
     except InputError as e:
         message = str(e)
     except OSError as e:  # an output (or input) the system refuses, named by the path it gave

@@ -23,6 +23,16 @@ STUDY_MAYBE_EMPTY = (["oracle_pairs", "oracle_crossing", "oracle_touching", "col
                      ["missed_pairs", "mp_crossing", "mp_touching"] + ["mp_" + c for c in CAUSES] +
                      ["false_positives", "efficiency", "attribution_ms", "switched_at_level", "exact_ms",
                       "time_to_exact_ms", "near_distance", "near_contacts", "near_contacts_self"])
+# Every method's measures against the oracle (docs/studies.md): a study from before the peers lacks
+# them; a run without the oracle leaves the pair counts empty, an image-space run the causes.
+FAMILIES = ["image-space", "exact", "peer"]
+MISSED_CAUSES = ["untested", "shared_edge", "shared_vertex", "coplanar", "touching", "within_tolerance", "unexplained"]
+SPURIOUS_CAUSES = ["degenerate", "shared_edge", "shared_vertex", "coplanar", "within_tolerance", "unexplained"]
+METHOD_MAYBE_EMPTY = (["time_to_pairs_ms", "pairs_found", "pairs_missed", "pairs_spurious", "tolerance"] +
+                      ["missed_" + c for c in MISSED_CAUSES] + ["spurious_" + c for c in SPURIOUS_CAUSES])
+# What only the image-space methods have: the exact method and the peers leave these empty.
+IMAGE_SPACE_ONLY = ["direction_count", "leaf_size", "branching", "time_ms", "time_min_ms", "time_max_ms",
+                    "hierarchy_ms", "calls", "levels", "triangles_rendered", "queries", "pcs"]
 PASS_NUMBERS = ["seconds", "triangles_in", "triangles_out", "triangles_rendered"]
 PASS_OPTIONAL = ["width", "height", "tiles", "views"]
 # Stability sweeps: each sweep's columns (text, then numbers), and the numbers any of them has
@@ -103,8 +113,13 @@ def check_study(path, rows, header=None):
         if missing:
             raise InputError(path, f"line {r.line}: not a study record: it has no {', '.join(missing)}")
         check_text(path, r, STUDY_TEXT)
-        check_numbers(path, r, STUDY_NUMBERS)
-        check_numbers(path, r, STUDY_MAYBE_EMPTY, may_be_empty=True)
+        family = r.get("family")
+        if family not in (None, "") and family not in FAMILIES:
+            raise InputError(path, f"{at(r)}: family is {family!r}: {', '.join(FAMILIES)}")
+        image_space = family in (None, "", "image-space")
+        check_numbers(path, r, [c for c in STUDY_NUMBERS if image_space or c not in IMAGE_SPACE_ONLY])
+        check_numbers(path, r, STUDY_MAYBE_EMPTY + METHOD_MAYBE_EMPTY +
+                      ([] if image_space else IMAGE_SPACE_ONLY), may_be_empty=True)
         check_passes(path, r)
     return rows
 

@@ -1,13 +1,13 @@
-"""`cullide report`: one HTML page with nothing outside it (charts as data: URIs, styles inline, no
-scripts), well-formed (every element closed, text escaped), so that it can be mailed, archived
-and parsed by a test."""
+"""`cullide report`: one HTML page with nothing outside it (charts as data: URIs, styles inline; no
+scripts but the 3D view's, inlined with three.js when one is asked for: view3d), well-formed
+(every element closed, text escaped), so that it can be mailed, archived and parsed by a test."""
 import os
 from collections import defaultdict
 
 from .encodings import AXES, ordered, pareto, scene_configs, scene_name
 from .load import num
 from .output import SAVE, make_folder, say
-from .study_charts import plot_study_rows
+from .study_charts import image_space_rows, plot_study_rows
 
 
 REPORT_CSS = """
@@ -36,6 +36,12 @@ CAPTIONS = {
                              "pairs). Labels: false prunes / colliding triangles.",
     "figure9_10_passes": "Per reducePCS call: time (blue, left axis) and triangles rendered (orange, right axis), "
                          "for one run per scene of the chosen method (the paper's Figures 9 and 10).",
+    "methods": "Every method on one chart, one panel per scene: the time to exact pairs per frame (build or refit "
+               "included) against the pairs missed (top) and the pairs reported that the oracle does not hold "
+               "(bottom), as % of the oracle's pairs. Colour: family (image-space blue, exact black, peers red and "
+               "orange); marker: method. Dashed: 1 %.",
+    "frame_times": "Time to exact pairs per frame along each animated scene, every method (image-space: prune and "
+                   "exact stage; peers: build or refit and query).",
     "figure11_accumulated": "Accumulated share of the triangles pruned against the accumulated share of the time, "
                             "per call (the paper's Figure 11): a curve above the diagonal spends its time before "
                             "it prunes.",
@@ -101,6 +107,11 @@ def pareto_section(rows):
     return "".join(parts)
 
 
+def pareto_part(rows):
+    image = image_space_rows(rows)
+    return pareto_section(image) if image else '<p class="note">No image-space runs.</p>\n'
+
+
 def provenance_section(rows, inputs):
     keys = ["cullide_version", "git_commit", "compiler", "cpu_model", "threads", "drivers"]
     values = defaultdict(list)
@@ -162,11 +173,22 @@ def runs_section(rows):
                                                              "false prunes"], table_rows, "runs")
 
 
-def write_report(rows, inputs, out):
-    """OUT/report.html of the records `rows` (inputs.read_report_inputs) read from `inputs`."""
+def view_part(view):
+    """The 3D view's section and its contents entry, or nothing when none was asked for."""
+    if not view or not view.get("frame"):
+        return "", ""
+    from .view3d import view_section
+    section = view_section(view["frame"], view.get("audit"), view.get("method"))
+    return '<h2 id="view">3D view of a frame</h2>\n' + section, '<a href="#view">3D view</a>, '
+
+
+def write_report(rows, inputs, out, view=None):
+    """OUT/report.html of the records `rows` (inputs.read_report_inputs) read from `inputs`, with
+    the 3D view of `view` ({"frame", "audit", "method"}: view3d) when given."""
     import base64
     import datetime
     import tempfile
+    view_html, view_link = view_part(view)  # its inputs checked before any chart is drawn
     SAVE.update(formats=("png",), print=False)
     with tempfile.TemporaryDirectory() as tmp:
         made = plot_study_rows(rows, tmp)
@@ -186,14 +208,14 @@ def write_report(rows, inputs, out):
         f"<h1>cullide study: {len(rows)} runs over {len(scenes)} scene(s)</h1>\n"
         '<p class="note">Made by <code>cullide report</code> at ' + esc(now) + ". Contents: "
         '<a href="#command">command</a>, <a href="#provenance">provenance</a>, <a href="#pareto">Pareto-optimal '
-        'configurations</a>, <a href="#charts">charts</a>, <a href="#runs">all runs</a>.</p>\n'
+        'configurations</a>, <a href="#charts">charts</a>, ' + view_link + '<a href="#runs">all runs</a>.</p>\n'
         '<h2 id="command">The command that produced the data</h2>\n' + command_section(rows) +
         '<h2 id="provenance">Provenance</h2>\n' + provenance_section(rows, inputs) +
         '<h2 id="axes">The sweep</h2>\n' + axes_section(rows) +
         '<h2 id="pareto">Pareto-optimal configurations, per scene</h2>\n'
         '<p class="note">Configurations that no other of the same scene beats on both time and false prunes '
-        "(frames of an animation summed), fastest first.</p>\n" + pareto_section(rows) +
-        '<h2 id="charts">Charts</h2>\n' + ("".join(figures) or '<p class="note">No charts.</p>\n') +
+        "(frames of an animation summed), fastest first.</p>\n" + pareto_part(rows) +
+        '<h2 id="charts">Charts</h2>\n' + ("".join(figures) or '<p class="note">No charts.</p>\n') + view_html +
         '<h2 id="runs">All runs</h2>\n<details><summary>' + f"{len(rows)} runs" + "</summary>\n" +
         runs_section(rows) + "</details>\n</body>\n</html>\n")
     make_folder(out)

@@ -1,6 +1,7 @@
 """The per-frame chart of an animated scene: what the oracle sees in each frame (intersecting pairs,
-crossing and touching, and near contacts) beside the PCS each method keeps, so that a reader sees
-how far a frame's PCS is from its true contacts as the scene moves."""
+crossing and touching, and near contacts) beside the PCS each image-space method keeps, so that a
+reader sees how far a frame's PCS is from its true contacts as the scene moves. (Every method's
+time per frame: method_charts.frame_times_chart.)"""
 from collections import defaultdict
 
 from .encodings import grid, method_color, ordered, scene_name
@@ -19,9 +20,11 @@ def _by_scene(rows):
         scene, frame = str(r["scene"]), num(r.get("frame"))
         if "@" in scene or frame is None:
             continue
-        pcs[scene][str(r["method"])].setdefault(int(frame), num(r["pcs"]))
         truth[scene].setdefault(int(frame), r)
-    return {s: m for s, m in pcs.items() if len(truth[s]) >= MIN_FRAMES}, truth
+        if r.get("family", "image-space") in ("image-space", "") and num(r.get("pcs")) is not None:
+            # (the exact method and the peers keep no PCS)
+            pcs[scene][str(r["method"])].setdefault(int(frame), num(r["pcs"]))
+    return {s: pcs[s] for s in truth if len(truth[s]) >= MIN_FRAMES}, truth
 
 
 def frames_chart(rows, out):

@@ -1,11 +1,13 @@
 """The study charts: speed against accuracy with the Pareto fronts, false prunes by cause, and
-all of a study's charts (with the paper's figures, paper_figures)."""
+all of a study's charts (with the paper's figures, paper_figures, and every method's,
+method_charts)."""
 import sys
 
 from .encodings import (CAUSES, MARKERS, common_text, config_text, grid, legend_handles, log_if_spread,
                         method_color, ordered, pareto, scene_configs, scene_name, varying_axes)
 from .load import num
 from .output import plt, save
+from .method_charts import family_of, frame_times_chart, methods_chart
 from .paper_figures import figure8, per_call_charts
 from .sequence_charts import frames_chart
 
@@ -126,7 +128,15 @@ def causes_chart(rows, out):
     return "false_prunes_by_cause"
 
 
+def image_space_rows(rows):
+    """The runs of the image-space methods: the charts of PCS, false prunes and reducePCS calls
+    are theirs (the exact method and the peers have none)."""
+    return [r for r in rows if family_of(r) == "image-space"]
+
+
 def plot_study_rows(rows, out):
-    made = [speed_vs_accuracy(rows, out), figure8(rows, out), causes_chart(rows, out), frames_chart(rows, out)]
-    made += per_call_charts(rows, out)
+    image = image_space_rows(rows)
+    made = [speed_vs_accuracy(image, out), figure8(image, out), causes_chart(image, out), frames_chart(rows, out)]
+    made += per_call_charts(image, out)
+    made += [methods_chart(rows, out), frame_times_chart(rows, out)]
     return [m for m in made if m]
