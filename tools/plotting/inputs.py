@@ -27,7 +27,8 @@ STUDY_MAYBE_EMPTY = (["oracle_pairs", "oracle_crossing", "oracle_touching", "col
 # them; a run without the oracle leaves the pair counts empty, an image-space run the causes.
 FAMILIES = ["image-space", "exact", "peer"]
 MISSED_CAUSES = ["untested", "shared_edge", "shared_vertex", "coplanar", "touching", "within_tolerance", "unexplained"]
-SPURIOUS_CAUSES = ["degenerate", "shared_edge", "shared_vertex", "coplanar", "within_tolerance", "unexplained"]
+SPURIOUS_CAUSES = ["degenerate", "shared_edge", "shared_vertex", "coplanar", "within_tolerance", "behind_face",
+                   "unexplained"]
 METHOD_MAYBE_EMPTY = (["time_to_pairs_ms", "pairs_found", "pairs_missed", "pairs_spurious", "tolerance"] +
                       ["missed_" + c for c in MISSED_CAUSES] + ["spurious_" + c for c in SPURIOUS_CAUSES])
 # What only the image-space methods have: the exact method and the peers leave these empty.
