@@ -118,7 +118,9 @@ private:
                 int(o.triangles.size()), reinterpret_cast<int*>(o.triangles.data()), int(sizeof(Triangle)),
                 int(o.positions.size()), reinterpret_cast<btScalar*>(o.positions.data()), int(sizeof(Vec3f)));
             o.shape = std::make_unique<btGImpactMeshShape>(o.arrays.get());
-            o.shape->setMargin(margin_);
+            // GImpact's triangle test counts pairs closer than the sum of the two shapes' margins:
+            // half each, so that pairs closer than PeerOptions::margin count.
+            o.shape->setMargin(margin_ / 2);
             o.shape->updateBound();  // builds the box sets
         }
     }

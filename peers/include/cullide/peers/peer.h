@@ -47,8 +47,9 @@ struct PeerFrame {
 };
 
 struct PeerOptions {
-    // Bullet's collision margin, in world units (GImpact's triangle tests count pairs closer than
-    // it as colliding); the study sets it to its tolerance.
+    // Bullet's collision margin, in world units: GImpact's triangle test counts pairs closer than
+    // it as colliding (the sum of two shapes' margins, so each shape gets half); the study sets it
+    // to its tolerance.
     double margin = 0;
 };
 
