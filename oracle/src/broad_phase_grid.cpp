@@ -397,23 +397,51 @@ void testCells(const JoinedBoxes& all, const Buffer<uint64_t>& entryBuffer, Cand
     });
 }
 
-// The boxes set aside: against every other box (a pair of two such boxes once).
+// Boxes sorted by their lower x (value, box), for the sweeps of the boxes set aside.
+std::vector<std::pair<double, uint32_t>> byLowerX(std::span<const Box> boxes, std::span<const uint32_t> which) {
+    std::vector<std::pair<double, uint32_t>> out;
+    out.reserve(which.size());
+    for (uint32_t g : which) out.push_back({double(boxes[g].lo[0]), g});
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+// The boxes set aside, against every other box (a pair of two such boxes once). Not against all n
+// boxes each: the grid's boxes span at most kMaxCellsPerBox cells, so their widths along x are
+// bounded by the widest of them, and a set-aside box meets only those whose lower x lies within
+// that width of its own interval (a binary search in the grid's boxes sorted by lower x); the set-
+// aside boxes meet each other in a sweep along x. On a scene of large and small triangles (two
+// cows of 5.8k triangles around a 75k bunny: the cows' boxes set aside) this tests a few percent
+// of the pairs that every-box-against-all tested.
 void testSetAside(const JoinedBoxes& all, const std::vector<uint32_t>& big, CandidateFn fn, void* user) {
     const size_t n = all.n;
     const std::span<const Box> boxes = all.boxes;
     std::vector<char> isBig(n, 0);
     for (uint32_t g : big) isBig[g] = 1;
-    parallelFor(0, big.size() * ((n + 4095) / 4096), 1, [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<uint32_t> held;  // the grid's boxes
+    held.reserve(n - big.size());
+    double widest = 0;  // in double, with room to spare: the search may only take too many
+    for (size_t g = 0; g < n; ++g)
+        if (!isBig[g]) held.push_back(uint32_t(g)), widest = std::max(widest, double(boxes[g].hi[0]) - boxes[g].lo[0]);
+    widest *= 1.001;
+    const std::vector<std::pair<double, uint32_t>> heldByX = byLowerX(boxes, held), bigByX = byLowerX(boxes, big);
+    parallelFor(0, bigByX.size(), 16, [&](const tbb::blocked_range<size_t>& r) {
         std::vector<Candidate> batch;
         batch.reserve(kBatch);
-        for (size_t job = r.begin(); job != r.end(); ++job) {
-            const uint32_t a = big[job % big.size()];
-            const size_t from = job / big.size() * 4096, to = std::min(n, from + 4096);
-            for (size_t b = from; b < to; ++b) {
-                if (b == a || (isBig[b] && b < a) || !overlap(boxes[a], boxes[b])) continue;
-                batch.push_back(a < b ? all.candidate(a, b) : all.candidate(b, a));
-                if (batch.size() == kBatch) fn(user, batch.data(), uint32_t(batch.size())), batch.clear();
-            }
+        const auto emit = [&](uint32_t a, uint32_t b) {
+            if (!overlap(boxes[a], boxes[b])) return;
+            batch.push_back(a < b ? all.candidate(a, b) : all.candidate(b, a));
+            if (batch.size() == kBatch) fn(user, batch.data(), uint32_t(batch.size())), batch.clear();
+        };
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            const uint32_t a = bigByX[i].second;
+            const Box& box = boxes[a];
+            // Held boxes with lower x in [lo - widest, hi]: the only ones whose x-interval can meet a's.
+            auto it = std::lower_bound(heldByX.begin(), heldByX.end(), std::pair{box.lo[0] - widest, uint32_t(0)});
+            const double hiX = box.hi[0];
+            for (; it != heldByX.end() && it->first <= hiX; ++it) emit(a, it->second);
+            // Set-aside boxes after a in x order whose lower x is within a's interval (each pair once).
+            for (size_t j = i + 1; j < bigByX.size() && bigByX[j].first <= hiX; ++j) emit(a, bigByX[j].second);
         }
         if (!batch.empty()) fn(user, batch.data(), uint32_t(batch.size()));
     });
