@@ -91,16 +91,9 @@ public:
     const PeerInfo& info() const override { return info_; }
 
     PeerFrame collide(const Scene& scene) override {
-        const FrameChanges changes = tracker_.next(scene);
-        PeerFrame frame;
-        frame.built = changes.build;
-        auto t0 = std::chrono::steady_clock::now();
-        guarded(tracker_, [&] { changes.build ? build(scene) : update(scene, changes); });
-        frame.updateSeconds = secondsSince(t0);
-        t0 = std::chrono::steady_clock::now();
-        frame.pairs = query();
-        frame.querySeconds = secondsSince(t0);
-        return frame;
+        return timedFrame(
+            tracker_, scene, [&](const FrameChanges& c) { c.build ? build(scene) : update(scene, c); },
+            [&] { return query(); });
     }
 
 private:

@@ -130,17 +130,12 @@ public:
     const PeerInfo& info() const override { return info_; }
 
     PeerFrame collide(const Scene& scene) override {
-        const FrameChanges changes = tracker_.next(scene);
-        PeerFrame frame;
-        frame.built = changes.build;
-        auto t0 = std::chrono::steady_clock::now();
-        guarded(tracker_, [&] { update(scene, changes); });
-        frame.updateSeconds = secondsSince(t0);
-        t0 = std::chrono::steady_clock::now();
-        frame.pairs = tbb::this_task_arena::max_concurrency() > 1 ? query<CGAL::Parallel_tag>(objects_)
-                                                                  : query<CGAL::Sequential_tag>(objects_);
-        frame.querySeconds = secondsSince(t0);
-        return frame;
+        return timedFrame(
+            tracker_, scene, [&](const FrameChanges& c) { update(scene, c); },
+            [&] {
+                return tbb::this_task_arena::max_concurrency() > 1 ? query<CGAL::Parallel_tag>(objects_)
+                                                                   : query<CGAL::Sequential_tag>(objects_);
+            });
     }
 
 private:

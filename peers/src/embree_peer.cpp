@@ -203,26 +203,24 @@ public:
     const PeerInfo& info() const override { return info_; }
 
     PeerFrame collide(const Scene& scene) override {
-        const FrameChanges changes = tracker_.next(scene);
-        PeerFrame frame;
-        frame.built = changes.build;
-        auto t0 = std::chrono::steady_clock::now();
-        guarded(tracker_, [&] { update(scene, changes); });
-        frame.updateSeconds = secondsSince(t0);
-        t0 = std::chrono::steady_clock::now();
+        return timedFrame(
+            tracker_, scene, [&](const FrameChanges& c) { update(scene, c); }, [&] { return query(); });
+    }
+
+private:
+    // rtcCollide(scene, scene) with the triangle test in its callback, the threads' pairs merged.
+    std::vector<TrianglePair> query() {
         CollideContext context{&objects_, {}};
         tsanRelease(&collideBefore);
         rtcCollide(scene_, scene_, collideCallback, &context);
         tsanAcquire(&collideAfter);
         check(device_, "rtcCollide");
-        for (std::vector<TrianglePair>& local : context.pairs)
-            frame.pairs.insert(frame.pairs.end(), local.begin(), local.end());
-        sortPairs(frame.pairs);
-        frame.querySeconds = secondsSince(t0);
-        return frame;
+        std::vector<TrianglePair> pairs;
+        for (std::vector<TrianglePair>& local : context.pairs) pairs.insert(pairs.end(), local.begin(), local.end());
+        sortPairs(pairs);
+        return pairs;
     }
 
-private:
     void update(const Scene& scene, const FrameChanges& changes) {
         if (changes.build) build(scene);
         for (size_t i = 0; i < scene.objects.size(); ++i) {

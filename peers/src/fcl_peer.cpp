@@ -81,24 +81,22 @@ public:
     const PeerInfo& info() const override { return info_; }
 
     PeerFrame collide(const Scene& scene) override {
-        const FrameChanges changes = tracker_.next(scene);
-        PeerFrame frame;
-        frame.built = changes.build;
-        auto t0 = std::chrono::steady_clock::now();
-        guarded(tracker_, [&] { changes.build ? build(scene) : update(scene, changes); });
-        frame.updateSeconds = secondsSince(t0);
-        t0 = std::chrono::steady_clock::now();
+        return timedFrame(
+            tracker_, scene, [&](const FrameChanges& c) { c.build ? build(scene) : update(scene, c); },
+            [&] { return query(); });
+    }
+
+private:
+    // fcl::collide on every pair of objects whose boxes meet, room for every contact.
+    std::vector<TrianglePair> query() {
         QueryContext context;
         context.request.num_max_contacts = std::numeric_limits<size_t>::max();
         context.request.enable_contact = false;  // the triangles' ids come with every contact anyway
         manager_->collide(&context, collideObjects);
         sortPairs(context.pairs);
-        frame.pairs = std::move(context.pairs);
-        frame.querySeconds = secondsSince(t0);
-        return frame;
+        return std::move(context.pairs);
     }
 
-private:
     void build(const Scene& scene) {
         objects_.clear();
         manager_ = std::make_unique<fcl::DynamicAABBTreeCollisionManagerd>();

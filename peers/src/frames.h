@@ -2,6 +2,7 @@
 // object is placed for a library whose transforms are rigid (FCL, Bullet), and the pair list.
 #pragma once
 
+#include "cullide/peers/peer.h"
 #include "cullide/scene.h"
 
 #include <Eigen/Core>
@@ -66,11 +67,27 @@ void guarded(FrameTracker& tracker, const F& f) {
     }
 }
 
-// Sorted, each pair once.
-void sortPairs(std::vector<TrianglePair>& pairs);
-
 inline double secondsSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+
+// A frame as every peer runs it: what changed since the last one (before the clock starts), the
+// update (a build or a refit, guarded) timed, then the query timed.
+template <typename Update, typename Query>
+PeerFrame timedFrame(FrameTracker& tracker, const Scene& scene, const Update& update, const Query& query) {
+    const FrameChanges changes = tracker.next(scene);
+    PeerFrame frame;
+    frame.built = changes.build;
+    auto t0 = std::chrono::steady_clock::now();
+    guarded(tracker, [&] { update(changes); });
+    frame.updateSeconds = secondsSince(t0);
+    t0 = std::chrono::steady_clock::now();
+    frame.pairs = query();
+    frame.querySeconds = secondsSince(t0);
+    return frame;
+}
+
+// Sorted, each pair once.
+void sortPairs(std::vector<TrianglePair>& pairs);
 
 }  // namespace cullide::peers::detail

@@ -190,7 +190,7 @@ def frame_times_chart(rows, out):
     for ax in list(axes.flat)[len(scenes):]:
         ax.set_visible(False)
     style.legend(fig)
-    fig.suptitle("Time to exact pairs per frame, every method (build or refit included)", fontsize=11)
+    fig.suptitle("Time to exact pairs per frame, every method (a peer's refit included, its one build not)", fontsize=11)
     fig.tight_layout()
     save(fig, out, "frame_times")
     return "frame_times"
