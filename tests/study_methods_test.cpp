@@ -132,4 +132,24 @@ TEST(StudyMethods, PeersBuildOncePerSequenceThenRefit) {
     EXPECT_NE(records[5]["oracle_pairs"], records[8]["oracle_pairs"]);  // the frames differ
 }
 
+// Trap: a library that cannot take a scene's geometry (CGAL wants a valid polygon mesh; a
+// resampled cow is not one) would end the whole sweep, the other methods' runs lost with it. Its
+// row says why, its measures empty, and the sweep goes on.
+TEST(StudyMethods, APeerThatCannotTakeASceneLeavesARowSayingWhy) {
+    test::TempDir dir;
+    StudyOptions o;
+    o.spec.scenes = {"cows:500"};
+    o.spec.methods = {"cgal", "exact"};
+    o.spec.repeats = 1;
+    o.out = dir / "refused.csv";
+    runStudy(o);
+    const auto records = readRecords(o.out);
+    ASSERT_EQ(records.size(), 2u);
+    EXPECT_NE(records[0].value("error", "").find("CGAL Surface_mesh"), std::string::npos) << records[0].dump();
+    EXPECT_TRUE(records[0]["time_to_pairs_ms"].is_null());
+    EXPECT_TRUE(records[0]["pairs_missed"].is_null());
+    EXPECT_GT(records[0]["oracle_pairs"].get<size_t>(), 0u);
+    EXPECT_EQ(records[1]["pairs_missed"], 0);
+}
+
 }  // namespace

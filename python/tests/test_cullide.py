@@ -305,6 +305,14 @@ def test_study(tmp_path):
     assert n["near_contacts"][0] > 0 and n["near_distance"][0] > 0
     with pytest.raises(ValueError, match="near_distance"):
         cullide.study("cows:500", repeats=1, near_distance=0.01, oracle=False, out=tmp_path / "m.csv")
+    # Every family in one call: the exact oracle and a peer beside an image-space method, judged
+    # by the audit with the tolerance given.
+    e = cullide.study("cows:500", methods=["modified", "exact", "embree"], resolutions=64, repeats=1, tolerance=1e-4,
+                      out=tmp_path / "e.csv")
+    assert list(e["family"]) == ["image-space", "exact", "peer"]
+    assert e["pairs_missed"][1] == 0 and list(e["missed_unexplained"])[1:] == [0, 0]
+    with pytest.raises(ValueError, match="tolerance"):
+        cullide.study("cows:500", methods="exact", repeats=1, tolerance=0.5, out=tmp_path / "f.csv")
 
 
 # Trap: a deforming object's frames read from its positions file one at a time: another frame

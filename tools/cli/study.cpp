@@ -197,7 +197,10 @@ int runStudyCommand(const StudyCliOptions& o) {
     size_t unexplained = 0;
     so.onRecord = [&](const nlohmann::ordered_json& r) {
         unexplained += unexplainedOf(r);
-        if (o.quiet) return;
+        if (r.contains("error"))  // a peer that cannot take the scene: said even with -q
+            std::fprintf(stderr, "cullide: warning: %s %s: %s\n", r["scene"].get<std::string>().c_str(),
+                         r["method"].get<std::string>().c_str(), r["error"].get<std::string>().c_str());
+        if (o.quiet || r.contains("error")) return;
         std::printf("%s\n", (r["family"] == "image-space" ? imageRunLine(r) : pairRunLine(r)).c_str());
         std::fflush(stdout);
     };

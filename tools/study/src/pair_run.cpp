@@ -3,6 +3,7 @@
 
 #include "records.h"
 
+#include "cullide/error.h"
 #include "cullide/oracle/audit.h"
 #include "cullide/parallel.h"
 #include "cullide/provenance.h"
@@ -12,13 +13,6 @@
 
 namespace cullide::study {
 namespace {
-
-// One timed call: its wall time, its split and its pairs.
-struct TimedPairs {
-    double seconds = 0;
-    double updateSeconds = 0;  // the peer's build or refit; the oracle's setup and grid
-    std::vector<TrianglePair> pairs;
-};
 
 std::vector<TrianglePair> pairsOf(const oracle::Truth& t) {
     std::vector<TrianglePair> out;
@@ -34,12 +28,17 @@ void addImageColumnsEmpty(nlohmann::ordered_json& j) {
         j[k] = nullptr;
 }
 
+// The timed runs' median, min and max (sorted by time); empty: none ran, the columns empty.
 void addTimes(nlohmann::ordered_json& j, const std::vector<TimedPairs>& timed) {
+    for (const char* k : {"calls", "levels", "triangles_rendered", "queries", "pcs"}) j[k] = nullptr;
+    if (timed.empty()) {
+        for (const char* k : {"time_ms", "time_min_ms", "time_max_ms", "hierarchy_ms"}) j[k] = nullptr;
+        return;
+    }
     j["time_ms"] = 1e3 * timed[timed.size() / 2].seconds;
     j["time_min_ms"] = 1e3 * timed.front().seconds;
     j["time_max_ms"] = 1e3 * timed.back().seconds;
     j["hierarchy_ms"] = 1e3 * timed[timed.size() / 2].updateSeconds;  // the BVH's build or refit, the grid
-    for (const char* k : {"calls", "levels", "triangles_rendered", "queries", "pcs"}) j[k] = nullptr;
 }
 
 // The oracle's counts and the missed pairs by class; the image-space causes and PCS measures empty.
@@ -54,6 +53,7 @@ void addTruthColumns(nlohmann::ordered_json& j, const oracle::Truth* truth, cons
     j["oracle_pairs"] = truth->pairs.size();
     j["oracle_crossing"] = truth->count(oracle::PairClass::Crossing);
     j["oracle_touching"] = truth->count(oracle::PairClass::Touching);
+    if (!audit) return;
     j["missed_pairs"] = audit->missed.size();
     j["mp_crossing"] = audit->missedByClass[size_t(oracle::PairClass::Crossing)];
     j["mp_touching"] = audit->missedByClass[size_t(oracle::PairClass::Touching)];
@@ -71,6 +71,38 @@ peers::Peer& PairRuns::peerFor(const RunConfig& c, double tolerance, bool& isNew
     return *peer;
 }
 
+std::vector<TimedPairs> PairRuns::timedExact(const Scene& scene, tbb::task_arena& arena, int repeats) {
+    std::vector<TimedPairs> timed;
+    for (int k = 0; k < repeats; ++k)
+        executeIn(arena, [&] {
+            const auto start = Clock::now();
+            const oracle::Truth t = oracle::findIntersections(scene, {}, &workspace_);
+            timed.push_back({secondsSince(start), t.setupSeconds + t.buildSeconds, pairsOf(t)});
+        });
+    return timed;
+}
+
+std::vector<TimedPairs> PairRuns::timedPeer(const RunConfig& c, const Scene& scene, double tolerance, int repeats,
+                                            tbb::task_arena& arena, nlohmann::ordered_json& j) {
+    bool isNew = false;
+    peers::Peer& peer = peerFor(c, tolerance, isNew);
+    j["library"] = peer.info().library;
+    j["usage"] = peer.info().usage;
+    if (isNew) {  // the build, once per sequence: a user pays it once, then refits every frame
+        const auto start = Clock::now();
+        executeIn(arena, [&] { (void)peer.collide(scene); });
+        j["build_ms"] = 1e3 * secondsSince(start);
+    }
+    std::vector<TimedPairs> timed;
+    for (int k = 0; k < repeats; ++k)
+        executeIn(arena, [&] {
+            const auto start = Clock::now();
+            peers::PeerFrame f = peer.collide(scene);
+            timed.push_back({secondsSince(start), f.updateSeconds, std::move(f.pairs)});
+        });
+    return timed;
+}
+
 nlohmann::ordered_json PairRuns::run(const RunConfig& c, const Scene& scene, const oracle::Truth* truth,
                                      double tolerance, int repeats) {
     const MethodFamily family = methodFamily(c.method, "method");
@@ -79,33 +111,27 @@ nlohmann::ordered_json PairRuns::run(const RunConfig& c, const Scene& scene, con
     addImageColumnsEmpty(j);
     j["threads"] = c.threads;
     j["repeats"] = repeats;
+    for (const char* k : {"exact_switch", "switched_at_level", "exact_ms", "time_to_exact_ms"}) j[k] = nullptr;
+    j["provenance"] = toJson(provenance(c.threads, {}));
 
     std::vector<TimedPairs> timed;
     bool selfPairs = true;
     if (family == MethodFamily::Exact) {
-        for (int k = 0; k < repeats; ++k)
-            executeIn(*arena, [&] {
-                const auto start = Clock::now();
-                const oracle::Truth t = oracle::findIntersections(scene, {}, &workspace_);
-                timed.push_back({secondsSince(start), t.setupSeconds + t.buildSeconds, pairsOf(t)});
-            });
+        timed = timedExact(scene, *arena, repeats);
     } else {
-        bool isNew = false;
-        peers::Peer& peer = peerFor(c, tolerance, isNew);
-        if (isNew) {  // the build, once per sequence: a user pays it once, then refits every frame
-            const auto start = Clock::now();
-            executeIn(*arena, [&] { (void)peer.collide(scene); });
-            j["build_ms"] = 1e3 * secondsSince(start);
+        try {
+            timed = timedPeer(c, scene, tolerance, repeats, *arena, j);
+        } catch (const InputError& e) {
+            // Geometry this library cannot take (CGAL's self_intersections wants a valid polygon
+            // mesh): a row that says so, not the end of the sweep; the next frame builds anew.
+            peers_.erase({c.method, c.threads});
+            j["error"] = e.what();
+            addTimes(j, {});
+            addTruthColumns(j, truth, nullptr);
+            addPairMeasure(j, {.family = family});
+            return j;
         }
-        for (int k = 0; k < repeats; ++k)
-            executeIn(*arena, [&] {
-                const auto start = Clock::now();
-                peers::PeerFrame f = peer.collide(scene);
-                timed.push_back({secondsSince(start), f.updateSeconds, std::move(f.pairs)});
-            });
-        selfPairs = peer.info().selfPairs;
-        j["library"] = peer.info().library;
-        j["usage"] = peer.info().usage;
+        selfPairs = peers_.at({c.method, c.threads})->info().selfPairs;
     }
     std::stable_sort(timed.begin(), timed.end(), [](const auto& a, const auto& b) { return a.seconds < b.seconds; });
     addTimes(j, timed);
@@ -116,12 +142,10 @@ nlohmann::ordered_json PairRuns::run(const RunConfig& c, const Scene& scene, con
         audit = oracle::audit(scene, *truth, median.pairs,
                               {.tolerance = tolerance, .selfPairsTested = selfPairs, .source = c.method});
     addTruthColumns(j, truth, &audit);
-    for (const char* k : {"exact_switch", "switched_at_level", "exact_ms", "time_to_exact_ms"}) j[k] = nullptr;
     PairMeasure m{.family = family, .timeToPairsSeconds = median.seconds, .truth = truth, .audit = &audit,
                   .tolerance = tolerance};
     addPairMeasure(j, m);
     j["pairs_reported"] = median.pairs.size();  // not a column: found + spurious, when judged
-    j["provenance"] = toJson(provenance(c.threads, {}));
     return j;
 }
 
