@@ -22,6 +22,8 @@
 //     tolerance 1e-5 of the diagonal); qualifies = 1 when the method misses at most 1 % of the
 //     oracle's pairs (docs/peers.md: the goal is exact at least 3x faster than every peer that
 //     qualifies, on scenes 0 and 1 at two threads).
+//   BM_EmbreeTutorial/<scene>/<threads>: the embree peer against Embree's own `collide` tutorial as
+//     written (below), on the same frames: is the peer used as Embree's demo uses it?
 #include "cullide/cloth.h"
 #include "cullide/generators.h"
 #include "cullide/mesh_io.h"
@@ -36,12 +38,14 @@
 #include "bench_util.h"
 
 #include <benchmark/benchmark.h>
+#include <embree3/rtcore.h>
 #include <tbb/global_control.h>
 
 #include <algorithm>
 #include <chrono>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -159,6 +163,109 @@ BENCHMARK(BM_Peers)
     ->ArgsProduct({{0, 1}, {0, 1, 2, 3, 4, 5}, {2}})
     ->ArgsProduct({{2, 3, 4}, {0, 2, 3, 4, 5}, {2}})
     ->ArgsProduct({{0, 1}, {0, 3, 5}, {1}})
+    ->Iterations(10)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Embree's `collide` tutorial as written, for a cross-check of the embree peer's time: one user
+// geometry per object (world positions, bounds callback), RTC_SCENE_FLAG_DYNAMIC, build quality
+// LOW, and per frame every geometry committed again, the scene committed and rtcCollide(scene,
+// scene) into one vector under a mutex, as the tutorial's callback collects its pairs. No
+// triangle test: its broad phase alone, which the peer's whole frame (refit, rtcCollide, the
+// triangle test) should not exceed by much if the peer is used as the tutorial uses Embree.
+class TutorialCollide {
+public:
+    explicit TutorialCollide(const Scene& scene) : device_(rtcNewDevice(nullptr)), scene_(rtcNewScene(device_)) {
+        rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_DYNAMIC);
+        rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_LOW);
+        meshes_.reserve(scene.objects.size());  // the geometries hold their addresses
+        for (size_t i = 0; i < scene.objects.size(); ++i) {
+            meshes_.push_back(scene.worldMesh(i));
+            RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
+            rtcSetGeometryUserPrimitiveCount(g, unsigned(meshes_.back().triangles.size()));
+            rtcSetGeometryUserData(g, &meshes_.back());
+            rtcSetGeometryBoundsFunction(g, bounds, nullptr);
+            rtcCommitGeometry(g);
+            rtcAttachGeometryByID(scene_, g, unsigned(i));
+            rtcReleaseGeometry(g);
+        }
+        rtcCommitScene(scene_);
+    }
+    ~TutorialCollide() {
+        rtcReleaseScene(scene_);
+        rtcReleaseDevice(device_);
+    }
+    TutorialCollide(const TutorialCollide&) = delete;
+    TutorialCollide& operator=(const TutorialCollide&) = delete;
+
+    // One frame of the same geometry: commit again, collide; the box pairs (both orders).
+    size_t frame(const Scene& scene) {
+        for (size_t i = 0; i < scene.objects.size(); ++i) {
+            meshes_[i].positions = scene.worldMesh(i).positions;
+            rtcCommitGeometry(rtcGetGeometry(scene_, unsigned(i)));
+        }
+        rtcCommitScene(scene_);
+        hits_.clear();
+        rtcCollide(scene_, scene_, collect, this);
+        return hits_.size();
+    }
+
+private:
+    static void bounds(const RTCBoundsFunctionArguments* args) {
+        const Mesh& m = *static_cast<const Mesh*>(args->geometryUserPtr);
+        const Triangle& t = m.triangles[args->primID];
+        const Vec3f lo = m.positions[t[0]].cwiseMin(m.positions[t[1]]).cwiseMin(m.positions[t[2]]);
+        const Vec3f hi = m.positions[t[0]].cwiseMax(m.positions[t[1]]).cwiseMax(m.positions[t[2]]);
+        *args->bounds_o = {lo.x(), lo.y(), lo.z(), 0, hi.x(), hi.y(), hi.z(), 0};
+    }
+    static void collect(void* user, RTCCollision* c, unsigned n) {
+        auto* self = static_cast<TutorialCollide*>(user);
+        const std::lock_guard<std::mutex> lock(self->mutex_);
+        self->hits_.insert(self->hits_.end(), c, c + n);
+    }
+
+    RTCDevice device_;
+    RTCScene scene_;
+    std::vector<Mesh> meshes_;  // world meshes, one per geometry (its user data)
+    std::mutex mutex_;
+    std::vector<RTCCollision> hits_;
+};
+
+//   BM_EmbreeTutorial/<scene>/<threads>: the embree peer's frame (refit, rtcCollide, triangle
+//     test) and the tutorial's broad phase as written (TutorialCollide) on the same frame,
+//     alternated. Counters: peer_ms, tutorial_ms (medians), peer_vs_tutorial (median ratio),
+//     tutorial_pairs (box pairs, both orders, of the last frame).
+void BM_EmbreeTutorial(benchmark::State& state) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(state.range(1)));
+    const std::vector<Scene>& frames = sceneFrames(int(state.range(0)));
+    std::unique_ptr<peers::Peer> peer = peers::makePeer("embree");
+    (void)peer->collide(frames[0]);  // the build
+    TutorialCollide tutorial(frames[0]);
+    std::vector<double> ours, theirs, ratio;
+    size_t frame = 0, pairs = 0;
+    for (auto _ : state) {
+        const Scene& scene = frames[frame++ % frames.size()];
+        auto t0 = std::chrono::steady_clock::now();
+        benchmark::DoNotOptimize(peer->collide(scene).pairs.size());
+        auto t1 = std::chrono::steady_clock::now();
+        pairs = tutorial.frame(scene);
+        auto t2 = std::chrono::steady_clock::now();
+        ours.push_back(std::chrono::duration<double>(t1 - t0).count());
+        theirs.push_back(std::chrono::duration<double>(t2 - t1).count());
+        ratio.push_back(ours.back() / theirs.back());
+    }
+    const auto median = [](std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        return v[v.size() / 2];
+    };
+    state.counters["peer_ms"] = 1e3 * median(ours);
+    state.counters["tutorial_ms"] = 1e3 * median(theirs);
+    state.counters["peer_vs_tutorial"] = median(ratio);
+    state.counters["tutorial_pairs"] = double(pairs);
+}
+BENCHMARK(BM_EmbreeTutorial)
+    ->ArgNames({"scene", "threads"})
+    ->ArgsProduct({{0, 1, 2}, {2}})
     ->Iterations(10)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
