@@ -147,12 +147,7 @@ nlohmann::ordered_json runOne(const RunConfig& c, const Scene& scene, const orac
     j["triangles_rendered"] = rendered;
     j["queries"] = queries;
     j["pcs"] = r.pcs.size();
-    for (const char* k : {"oracle_pairs",      "oracle_crossing", "oracle_touching",   "colliding",   "false_prunes",
-                          "fp_crossing",       "fp_touching",     "fp_depth_rounding", "fp_sampling", "fp_edge_on",
-                          "fp_untested",       "fp_unexplained",  "missed_pairs",      "mp_crossing", "mp_touching",
-                          "mp_depth_rounding", "mp_sampling",     "mp_edge_on",        "mp_untested", "mp_unexplained",
-                          "false_positives",   "efficiency",      "attribution_ms"})
-        j[k] = nullptr;
+    addOracleColumnsEmpty(j);
     j["exact_switch"] = c.exactSwitch;
     j["switched_at_level"] = r.switchedAtLevel >= 0 ? nlohmann::ordered_json(r.switchedAtLevel) : nullptr;
     j["exact_ms"] = nullptr;

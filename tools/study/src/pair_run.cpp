@@ -43,12 +43,7 @@ void addTimes(nlohmann::ordered_json& j, const std::vector<TimedPairs>& timed) {
 
 // The oracle's counts and the missed pairs by class; the image-space causes and PCS measures empty.
 void addTruthColumns(nlohmann::ordered_json& j, const oracle::Truth* truth, const oracle::Audit* audit) {
-    for (const char* k : {"oracle_pairs",      "oracle_crossing", "oracle_touching",   "colliding",   "false_prunes",
-                          "fp_crossing",       "fp_touching",     "fp_depth_rounding", "fp_sampling", "fp_edge_on",
-                          "fp_untested",       "fp_unexplained",  "missed_pairs",      "mp_crossing", "mp_touching",
-                          "mp_depth_rounding", "mp_sampling",     "mp_edge_on",        "mp_untested", "mp_unexplained",
-                          "false_positives",   "efficiency",      "attribution_ms"})
-        j[k] = nullptr;
+    addOracleColumnsEmpty(j);
     if (!truth) return;
     j["oracle_pairs"] = truth->pairs.size();
     j["oracle_crossing"] = truth->count(oracle::PairClass::Crossing);

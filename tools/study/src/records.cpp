@@ -17,6 +17,15 @@ nlohmann::ordered_json recordHead(const RunConfig& c, const Scene& scene) {
     return j;
 }
 
+void addOracleColumnsEmpty(nlohmann::ordered_json& j) {
+    for (const char* k : {"oracle_pairs",      "oracle_crossing", "oracle_touching",   "colliding",   "false_prunes",
+                          "fp_crossing",       "fp_touching",     "fp_depth_rounding", "fp_sampling", "fp_edge_on",
+                          "fp_untested",       "fp_unexplained",  "missed_pairs",      "mp_crossing", "mp_touching",
+                          "mp_depth_rounding", "mp_sampling",     "mp_edge_on",        "mp_untested", "mp_unexplained",
+                          "false_positives",   "efficiency",      "attribution_ms"})
+        j[k] = nullptr;
+}
+
 void addPairMeasure(nlohmann::ordered_json& j, const PairMeasure& m) {
     using Json = nlohmann::ordered_json;
     j["family"] = toString(m.family);

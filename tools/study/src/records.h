@@ -25,6 +25,10 @@ inline std::unique_ptr<tbb::task_arena> runArena(int threads) {
 // The record's first fields: index, id, scene, frame, triangles, objects, method.
 nlohmann::ordered_json recordHead(const RunConfig& c, const Scene& scene);
 
+// The oracle's columns (its pairs, the PCS's false prunes and missed pairs by class and cause,
+// false positives, efficiency, attribution_ms), empty: filled where a run measures them.
+void addOracleColumnsEmpty(nlohmann::ordered_json& record);
+
 // The columns every family fills in its own way: family, time_to_pairs_ms, pairs_found,
 // pairs_missed, pairs_spurious, tolerance and the audit's causes (null where `audit` is).
 // `timeToPairs` < 0: not known (null).
