@@ -3,8 +3,9 @@
 # 3D view of `cullide report` (tools/report3d: `npm ci`, the version its package-lock.json pins).
 #
 # Non-interactive and idempotent: packages already installed are left alone, and when nothing
-# is missing the script only checks (well under a second) and says so. Only Debian's archive is
-# used (apt-get); nothing is downloaded from anywhere else. Run as root (or with sudo available).
+# is missing the script only checks (well under a second) and says so. Packages come from Debian's
+# archive only (apt-get), three.js from npm's registry only (`npm ci` checks the lock file's
+# integrity hashes); nothing is downloaded from anywhere else. Run as root (or with sudo available).
 set -euo pipefail
 
 packages=(
