@@ -34,6 +34,8 @@
 #include "cullide/pipeline/pruner.h"
 #include "cullide/raster/backends.h"
 #include "cullide/resources.h"
+#include "cullide/study/measures.h"
+#include "cullide/study/methods.h"
 
 #include "bench_util.h"
 
@@ -84,13 +86,6 @@ const std::vector<Scene>& sceneFrames(int which) {
 
 const char* const kMethods[] = {"exact", "modified", "fcl", "embree", "bullet", "cgal"};
 
-double diagonalOf(const Scene& s) {
-    Vec3f lo = Vec3f::Constant(1e30f), hi = Vec3f::Constant(-1e30f);
-    for (size_t i = 0; i < s.objects.size(); ++i)
-        for (const Vec3f& p : s.worldMesh(i).positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-    return double((hi - lo).norm());
-}
-
 // One frame's pairs by method `m` (1..5), timed; `peer` is the method's when it is a peer.
 double timeMethod(int m, const Scene& scene, peers::Peer* peer, DepthBackend* backend, std::vector<TrianglePair>* pairs) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -116,7 +111,9 @@ void BM_Peers(benchmark::State& state) {
     const std::vector<Scene>& frames = sceneFrames(which);
     std::unique_ptr<peers::Peer> peer;
     std::unique_ptr<DepthBackend> backend;
-    if (m >= 2) peer = peers::makePeer(kMethods[m], {.margin = 1e-5 * diagonalOf(frames[0])});
+    // The study's default tolerance, as a study would set it: a fraction of the first frame's diagonal.
+    const double tolerance = study::kDefaultTolerance * study::sceneDiagonal(frames[0]);
+    if (m >= 2) peer = peers::makePeer(kMethods[m], {.margin = tolerance});
     if (m == 1) backend = raster::makeBackend("cpu", int(state.range(2)));
 
     // Untimed: the method's pairs on every frame judged by the audit (a peer's first call builds it).
@@ -127,7 +124,7 @@ void BM_Peers(benchmark::State& state) {
             std::vector<TrianglePair> pairs;
             timeMethod(m, s, peer.get(), backend.get(), &pairs);
             const oracle::Audit a = oracle::audit(s, truth, pairs,
-                                                  {.tolerance = 1e-5 * diagonalOf(frames[0]),
+                                                  {.tolerance = tolerance,
                                                    .selfPairsTested = !peer || peer->info().selfPairs});
             truthPairs += truth.pairs.size(), missed += a.missed.size(), spurious += a.spurious.size();
         }
