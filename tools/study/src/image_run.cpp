@@ -9,7 +9,7 @@
 #include "cullide/parallel.h"
 #include "cullide/provenance.h"
 
-#include "records.h"
+#include "record_fields.h"
 
 #include <tbb/task_arena.h>
 

@@ -1,7 +1,7 @@
 // Runs of the exact method and the peers (pair_run.h).
 #include "pair_run.h"
 
-#include "records.h"
+#include "record_fields.h"
 
 #include "cullide/error.h"
 #include "cullide/oracle/audit.h"

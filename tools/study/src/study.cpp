@@ -8,7 +8,7 @@
 #include "cullide/pipeline/pruner.h"
 
 #include "pair_run.h"
-#include "records.h"
+#include "record_fields.h"
 
 #include "cullide/cloth.h"
 #include "cullide/error.h"

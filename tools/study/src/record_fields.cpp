@@ -1,5 +1,5 @@
-// The fields every run's record shares (records.h).
-#include "records.h"
+// The fields every run's record shares (record_fields.h).
+#include "record_fields.h"
 
 #include <string>
 
