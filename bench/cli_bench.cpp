@@ -86,7 +86,7 @@ const fs::path& scratchDir() {
     return dir;
 }
 
-// The 1M bunny scene, generated once by the tool itself (as the figures were made).
+// The 1M bunny scene, generated once by the tool itself (`cullide make-scene bunny --triangles 1000000`).
 const fs::path& bunny1M() {
     static const fs::path scene = [] {
         const fs::path out = scratchDir() / "bunny1m.json";
