@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -37,6 +38,42 @@ TEST(FileIo, WritesTheBytesAndLeavesNoTemporary) {
     s << f.rdbuf();
     EXPECT_EQ(s.str(), "second\n");
     EXPECT_EQ(std::distance(fs::directory_iterator(d), fs::directory_iterator()), 1);
+}
+
+// Trap: an output renamed onto a device or a FIFO replaces it: `prune --json /dev/null`, run as
+// root, left /dev/null a regular file for every later process. A FIFO stands in for the device
+// (a test must not risk /dev/null itself; outputTarget only looks at it): its reader gets the
+// bytes and it stays a FIFO; one that nobody reads is refused at once, not waited for. Through a
+// symbolic link the file it leads to is replaced whole and the link stays a link.
+TEST(FileIo, DevicesFifosAndLinksStayWhatTheyAre) {
+    EXPECT_TRUE(outputTarget("/dev/null").inPlace());
+    const fs::path d = freshDir("special");
+    const fs::path fifo = d / "out.fifo";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    try {
+        writeFileAtomically(fifo, "nobody reads");
+        FAIL() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("no process reads"), std::string::npos) << e.what();
+    }
+    const int reader = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+    ASSERT_GE(reader, 0);
+    writeFileAtomically(fifo, "through the pipe\n");
+    char got[64] = {};
+    EXPECT_EQ(::read(reader, got, sizeof got), ssize_t(17));
+    EXPECT_STREQ(got, "through the pipe\n");
+    ::close(reader);
+    struct stat st {};
+    ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
+    EXPECT_TRUE(S_ISFIFO(st.st_mode));
+
+    writeFileAtomically(d / "target.txt", "old");
+    fs::create_symlink("target.txt", d / "link.txt");
+    writeFileAtomically(d / "link.txt", "new");
+    EXPECT_TRUE(fs::is_symlink(d / "link.txt"));
+    EXPECT_EQ(test::readBytes((d / "target.txt").string()), "new");
+    EXPECT_EQ(std::distance(fs::directory_iterator(d), fs::directory_iterator()), 3);  // no temporary left
+    EXPECT_THROW(writeFileAtomically(d, "a folder"), InputError);
 }
 
 // Trap: a missing folder is the commonest cause of a failed write; the message says so (not

@@ -422,13 +422,14 @@ TEST(Trace, WriterLeavesNothingBehindWhileWritingOrOnFailure) {
         EXPECT_EQ(entries(), std::vector<std::string>{}) << "the scratch file has a name while recording";
     }
     EXPECT_EQ(entries(), std::vector<std::string>{});
-    // The destination is a folder: finish fails naming it, and leaves only that folder.
-    std::filesystem::create_directory(dir / "t.trace");
+    // The destination becomes a folder while recording: finish fails naming it, and leaves only
+    // that folder. (One that is a folder from the start is refused before any work.)
     {
         auto cpu = raster::makeCpuBackend();
         raster::TraceWriter writer(dir / "t.trace", {}, {}, {});
         raster::TraceRecorder recorder(*cpu, writer, {});
         runCullide(a.scene, recorder, smallOptions());
+        std::filesystem::create_directory(dir / "t.trace");
         try {
             recorder.finish();
             ADD_FAILURE() << "finished into a folder";
@@ -438,6 +439,7 @@ TEST(Trace, WriterLeavesNothingBehindWhileWritingOrOnFailure) {
     }
     EXPECT_EQ(entries(), std::vector<std::string>{"t.trace"});
     EXPECT_TRUE(std::filesystem::is_directory(dir / "t.trace"));
+    EXPECT_THROW(raster::TraceWriter(dir / "t.trace", {}, {}, {}), InputError);
     // A missing folder: named, nothing created.
     EXPECT_THROW(raster::TraceWriter(dir / "no" / "t.trace", {}, {}, {}), InputError);
 }

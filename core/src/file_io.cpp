@@ -29,15 +29,24 @@ std::string systemCause(int error) {
     return cause;
 }
 
+// What a file that is neither regular nor a folder is, for messages.
+const char* specialKind(mode_t mode) {
+    if (S_ISFIFO(mode)) return "a FIFO";
+    if (S_ISCHR(mode)) return "a character device";
+    if (S_ISBLK(mode)) return "a block device";
+    if (S_ISSOCK(mode)) return "a socket";
+    return "a special file";
+}
+
 void requireRegular(const std::string& src, mode_t mode) {
     if (S_ISREG(mode)) return;
     if (S_ISDIR(mode)) throw InputError(src, "cannot read: it is a directory, not a file");
-    const char* kind = "a special file";
-    if (S_ISFIFO(mode)) kind = "a FIFO";
-    if (S_ISCHR(mode)) kind = "a character device";
-    if (S_ISBLK(mode)) kind = "a block device";
-    if (S_ISSOCK(mode)) kind = "a socket";
-    throw InputError(src, std::string("cannot read: not a regular file (") + kind + ")");
+    throw InputError(src, std::string("cannot read: not a regular file (") + specialKind(mode) + ")");
+}
+
+void refuseNul(const fs::path& path) {
+    if (path.native().find('\0') != std::string::npos)
+        throw InputError(pathText(path), "cannot write: the path contains a NUL byte");
 }
 
 [[noreturn]] void tooLarge(const std::string& src, uint64_t bytes, uint64_t maxBytes, std::string_view kind,
@@ -149,22 +158,60 @@ InputError cannotWrite(const fs::path& path, int err) {
     return InputError(pathText(path), std::string("cannot write: ") + std::strerror(err));
 }
 
+OutputTarget outputTarget(const fs::path& path) {
+    refuseNul(path);
+    struct stat link {};
+    if (::lstat(path.c_str(), &link) != 0) return {path};  // nothing there (or the open says why)
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) {  // a symbolic link to nothing, replaced; or a loop
+        if (errno == ELOOP) throw InputError(pathText(path), "cannot write: " + systemCause(ELOOP));
+        return {path};
+    }
+    if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) return {};
+    if (S_ISDIR(st.st_mode)) throw InputError(pathText(path), "cannot write: it is a directory, not a file");
+    if (!S_ISREG(st.st_mode))
+        throw InputError(pathText(path), std::string("cannot write: not a regular file (") + specialKind(st.st_mode) + ")");
+    if (!S_ISLNK(link.st_mode)) return {path};
+    std::error_code ec;
+    const fs::path target = fs::canonical(path, ec);
+    if (ec) throw InputError(pathText(path), "cannot write: " + ec.message());
+    return {target};
+}
+
+std::FILE* openInPlace(const fs::path& path) {
+    refuseNul(path);
+    // Non-blocking, so that a FIFO nobody reads fails at once (ENXIO) instead of waiting.
+    const int fd = ::open(path.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        if (errno == ENXIO) throw InputError(pathText(path), "cannot write: a FIFO that no process reads");
+        throw cannotWrite(path, errno);
+    }
+    const int flags = ::fcntl(fd, F_GETFL);
+    std::FILE* f = flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0 ? nullptr : ::fdopen(fd, "wb");
+    if (!f) {
+        const int err = errno;
+        ::close(fd);
+        throw cannotWrite(path, err);
+    }
+    return f;
+}
+
 void writeFileAtomically(const fs::path& path, std::string_view bytes) {
     const std::string src = pathText(path);
-    if (path.native().find('\0') != std::string::npos)
-        throw InputError(src, "cannot write: the path contains a NUL byte");
-    const fs::path tmp = temporaryBeside(path);
-    std::FILE* f = std::fopen(tmp.string().c_str(), "wb");
+    const OutputTarget target = outputTarget(path);
+    const fs::path tmp = target.inPlace() ? fs::path() : temporaryBeside(target.renameOnto);
+    std::FILE* f = target.inPlace() ? openInPlace(path) : std::fopen(tmp.string().c_str(), "wb");
     if (!f) throw cannotWrite(path, errno);
     const bool wrote = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
     const int writeErrno = errno;
     const bool closed = std::fclose(f) == 0;
     std::error_code ec;
     if (!wrote || !closed) {
-        fs::remove(tmp, ec);
+        if (!tmp.empty()) fs::remove(tmp, ec);
         throw InputError(src, std::string("cannot write: ") + std::strerror(wrote ? errno : writeErrno));
     }
-    fs::rename(tmp, path, ec);
+    if (target.inPlace()) return;
+    fs::rename(tmp, target.renameOnto, ec);
     if (ec) {
         std::error_code ignored;
         fs::remove(tmp, ignored);

@@ -173,10 +173,9 @@ void writePositionsFile(const fs::path& path, uint32_t vertexCount, uint64_t fra
     CULLIDE_CHECK(vertexCount > 0 && frameCount > 0 && frameCount <= kMaxPositionsFrames,
                   "a positions file needs vertices and 1 to kMaxPositionsFrames frames");
     const std::string source = pathText(path);
-    if (path.native().find('\0') != std::string::npos)
-        throw InputError(source, "cannot write: the path contains a NUL byte");
-    const fs::path tmp = temporaryBeside(path);
-    std::FILE* out = std::fopen(tmp.c_str(), "wb");
+    const OutputTarget target = outputTarget(path);
+    const fs::path tmp = target.inPlace() ? fs::path() : temporaryBeside(target.renameOnto);
+    std::FILE* out = target.inPlace() ? openInPlace(path) : std::fopen(tmp.c_str(), "wb");
     if (!out) throw cannotWrite(path, errno);
     struct Temporary {  // removed unless renamed into place
         std::FILE*& file;
@@ -185,7 +184,7 @@ void writePositionsFile(const fs::path& path, uint32_t vertexCount, uint64_t fra
         ~Temporary() {
             if (file) std::fclose(file);
             std::error_code ec;
-            if (!done) fs::remove(path, ec);
+            if (!done && !path.empty()) fs::remove(path, ec);
         }
     } temporary{out, tmp};
 
@@ -210,8 +209,9 @@ void writePositionsFile(const fs::path& path, uint32_t vertexCount, uint64_t fra
     const bool closed = std::fclose(out) == 0;
     out = nullptr;
     if (!wrote || !closed) throw InputError(source, std::string("cannot write: ") + std::strerror(wrote ? errno : writeErrno));
+    if (target.inPlace()) return;
     std::error_code ec;
-    fs::rename(tmp, path, ec);
+    fs::rename(tmp, target.renameOnto, ec);
     if (ec) throw InputError(source, "cannot write: " + ec.message());
     temporary.done = true;
 }

@@ -16,6 +16,7 @@ import json
 import os
 import shutil
 import signal
+import stat
 import struct
 import subprocess
 import sys
@@ -290,10 +291,37 @@ def option_cases(d):
     ]
 
 
+def stays(path, kind):
+    """A check that `path` is still a FIFO or a symbolic link (an output renamed onto it replaced it)."""
+    def check():
+        is_kind = {"fifo": lambda p: stat.S_ISFIFO(os.lstat(p).st_mode), "link": os.path.islink}[kind]
+        return None if os.path.lexists(path) and is_kind(path) else f"{path} is no longer a {kind}"
+    return check
+
+
+def linked_output(d):
+    """`linked.json` -> `target.json`: oracle --json through the link must keep it a link."""
+    def check():
+        if not os.path.islink(os.path.join(d, "linked.json")):
+            return "linked.json is no longer a symbolic link"
+        with open(os.path.join(d, "target.json")) as f:
+            return None if '"pairs"' in f.read() else "target.json does not hold the oracle's JSON"
+    return check
+
+
 def output_cases(d):
     os.mkdir(os.path.join(d, "taken.json"))  # a folder where the scene file would go
     os.mkdir(os.path.join(d, "e.jsonl"))  # a folder where the study's .jsonl would go
+    os.mkfifo(os.path.join(d, "unread.fifo"))  # an output nobody reads: refused, not waited for
+    write(d, "target.json", "{}")
+    os.symlink("target.json", os.path.join(d, "linked.json"))
     cases = [
+        Case("prune: --json into a FIFO nobody reads", ["prune", "pair.json", "--json", "unread.fifo"],
+             names=["unread.fifo", "no process reads"], check=stays(os.path.join(d, "unread.fifo"), "fifo")),
+        Case("trace record: into a FIFO", ["trace", "record", "pair.json", "-o", "unread.fifo"],
+             names=["unread.fifo", "FIFO"], check=stays(os.path.join(d, "unread.fifo"), "fifo")),
+        Case("oracle: --json through a symbolic link", ["oracle", "pair.json", "--json", "linked.json"], rc=0,
+             check=linked_output(d)),
         Case("make-scene: scene file cannot be written", ["make-scene", "sheets", "-o", "taken.json"],
              names=["taken.json"], check=lambda: (
                  "left meshes: " + ", ".join(n for n in os.listdir(d) if n.startswith("taken_"))

@@ -4,6 +4,7 @@
 #include "cullide/error.h"
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -32,10 +33,26 @@ std::string readFile(const std::filesystem::path& path, uint64_t maxBytes = kMax
                      std::string_view kind = "an input file");
 
 // Writes `bytes` to `path` through a temporary file beside it (unique per process and call)
-// and a rename, so a reader never sees a half-written file and a failed write leaves nothing.
+// and a rename, so a reader never sees a half-written file and a failed write leaves nothing;
+// into a character device or FIFO in place (outputTarget).
 // Throws InputError(path, cause) when the file cannot be written ("folder F does not exist" when
 // the folder it would go in is missing: folders are never created).
 void writeFileAtomically(const std::filesystem::path& path, std::string_view bytes);
+
+// Where an output at `path` is written. Nothing there, or a regular file: a temporary beside it,
+// renamed into place (`renameOnto`: `path`, or the file a symbolic link at `path` leads to, so
+// that the link stays a link). A character device or a FIFO (/dev/null; /dev/stdout on a pipe or
+// a terminal): in place, since renaming a file onto it would replace the device itself. Throws
+// InputError(pathText(path), cause) for a folder, a block device, a socket or a NUL byte.
+struct OutputTarget {
+    std::filesystem::path renameOnto;  // empty: written in place
+    bool inPlace() const { return renameOnto.empty(); }
+};
+OutputTarget outputTarget(const std::filesystem::path& path);
+
+// The character device or FIFO at `path` (outputTarget's in-place case) opened for writing; a
+// FIFO with no reader is refused ("no process reads it"), not waited for. Throws InputError.
+std::FILE* openInPlace(const std::filesystem::path& path);
 
 // A fresh name beside `path` for the temporary an all-or-nothing write renames into place:
 // "<path>.tmp.<pid>.<n>", unique per process and call.

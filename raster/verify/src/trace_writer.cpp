@@ -95,12 +95,13 @@ std::array<uint32_t, 4> encodeCommand(const Command& c) {
 // the destructor unless committed (a kill -9 then leaves it: the one case that can).
 class TraceWriter::PendingFile {
 public:
-    explicit PendingFile(std::filesystem::path destination) : destination_(std::move(destination)) {
-        const std::filesystem::path folder = destination_.parent_path().empty() ? "." : destination_.parent_path();
+    explicit PendingFile(std::filesystem::path destination)
+        : destination_(std::move(destination)), renameOnto_(assembledFor(destination_)) {
+        const std::filesystem::path folder = renameOnto_.parent_path().empty() ? "." : renameOnto_.parent_path();
         // Naming an unnamed file needs /proc/self/fd (linkat of its descriptor).
         if (::access("/proc/self/fd", X_OK) == 0) fd_ = ::open(folder.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0666);
         if (fd_ < 0) {  // no O_TMPFILE here, or another problem, which the named open then reports
-            named_ = temporaryBeside(destination_);
+            named_ = temporaryBeside(renameOnto_);
             fd_ = ::open(named_.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, 0666);
             if (fd_ < 0) throw cannotWrite(destination_, errno);
         }
@@ -130,7 +131,7 @@ public:
         if (std::fflush(file_) != 0) err = errno;
         std::filesystem::path named = named_;
         if (err == 0 && named.empty()) {  // O_TMPFILE: a name beside the destination, then the rename
-            named = temporaryBeside(destination_);
+            named = temporaryBeside(renameOnto_);
             const std::string self = "/proc/self/fd/" + std::to_string(fd_);
             if (::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, named.c_str(), AT_SYMLINK_FOLLOW) != 0) err = errno;
             else named_ = named;
@@ -138,7 +139,7 @@ public:
         if (std::fclose(file_) != 0 && err == 0) err = errno;
         file_ = nullptr;
         fd_ = -1;
-        if (err == 0 && std::rename(named_.c_str(), destination_.c_str()) != 0) err = errno;
+        if (err == 0 && std::rename(named_.c_str(), renameOnto_.c_str()) != 0) err = errno;
         if (err != 0) {
             discard();
             throw cannotWrite(destination_, err);
@@ -147,6 +148,17 @@ public:
     }
 
 private:
+    // Where the assembled trace is renamed (outputTarget): never a device or a FIFO, since a trace
+    // is written, then read back and completed, in a file of its own.
+    static std::filesystem::path assembledFor(const std::filesystem::path& destination) {
+        const OutputTarget target = outputTarget(destination);
+        if (target.inPlace())
+            throw InputError(pathText(destination),
+                             "cannot write: a trace is assembled in a file and renamed into place, not written "
+                             "into a device or FIFO");
+        return target.renameOnto;
+    }
+
     void discard() {
         if (file_) std::fclose(file_);
         else if (fd_ >= 0) ::close(fd_);
@@ -155,7 +167,7 @@ private:
         unname();
     }
 
-    std::filesystem::path destination_, named_;
+    std::filesystem::path destination_, renameOnto_, named_;
     int fd_ = -1;
     std::FILE* file_ = nullptr;
 };
