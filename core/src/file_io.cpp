@@ -178,9 +178,11 @@ OutputTarget outputTarget(const fs::path& path) {
     return {target};
 }
 
+namespace {
+
+// The character device or FIFO at `path` opened for writing. Non-blocking at first, so that a FIFO
+// nobody reads fails at once (ENXIO) instead of waiting for a reader.
 std::FILE* openInPlace(const fs::path& path) {
-    refuseNul(path);
-    // Non-blocking, so that a FIFO nobody reads fails at once (ENXIO) instead of waiting.
     const int fd = ::open(path.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
         if (errno == ENXIO) throw InputError(pathText(path), "cannot write: a FIFO that no process reads");
@@ -196,27 +198,46 @@ std::FILE* openInPlace(const fs::path& path) {
     return f;
 }
 
-void writeFileAtomically(const fs::path& path, std::string_view bytes) {
-    const std::string src = pathText(path);
-    const OutputTarget target = outputTarget(path);
-    const fs::path tmp = target.inPlace() ? fs::path() : temporaryBeside(target.renameOnto);
-    std::FILE* f = target.inPlace() ? openInPlace(path) : std::fopen(tmp.string().c_str(), "wb");
-    if (!f) throw cannotWrite(path, errno);
-    const bool wrote = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-    const int writeErrno = errno;
-    const bool closed = std::fclose(f) == 0;
+}  // namespace
+
+OutputFile::OutputFile(const fs::path& path) : path_(path), target_(outputTarget(path)) {
+    if (target_.inPlace()) {
+        file_ = openInPlace(path_);
+        return;
+    }
+    temporary_ = temporaryBeside(target_.renameOnto);
+    file_ = std::fopen(temporary_.c_str(), "wb");
+    if (!file_) throw cannotWrite(path_, errno);
+}
+
+OutputFile::~OutputFile() {
+    if (file_) std::fclose(file_);
     std::error_code ec;
-    if (!wrote || !closed) {
-        if (!tmp.empty()) fs::remove(tmp, ec);
-        throw InputError(src, std::string("cannot write: ") + std::strerror(wrote ? errno : writeErrno));
-    }
-    if (target.inPlace()) return;
-    fs::rename(tmp, target.renameOnto, ec);
-    if (ec) {
-        std::error_code ignored;
-        fs::remove(tmp, ignored);
-        throw InputError(src, "cannot write: " + ec.message());
-    }
+    if (!temporary_.empty()) fs::remove(temporary_, ec);
+}
+
+void OutputFile::write(std::string_view bytes) {
+    if (writeError_ == 0 && std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size())
+        writeError_ = errno ? errno : EIO;
+}
+
+void OutputFile::commit() {
+    const bool closed = std::fclose(file_) == 0;
+    const int closeError = errno;
+    file_ = nullptr;
+    if (writeError_ != 0 || !closed)
+        throw InputError(pathText(path_), std::string("cannot write: ") + std::strerror(writeError_ ? writeError_ : closeError));
+    if (target_.inPlace()) return;
+    std::error_code ec;
+    fs::rename(temporary_, target_.renameOnto, ec);
+    if (ec) throw InputError(pathText(path_), "cannot write: " + ec.message());
+    temporary_.clear();  // renamed: nothing for the destructor to remove
+}
+
+void writeFileAtomically(const fs::path& path, std::string_view bytes) {
+    OutputFile out(path);
+    out.write(bytes);
+    out.commit();
 }
 
 }  // namespace cullide

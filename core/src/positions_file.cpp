@@ -172,30 +172,15 @@ void writePositionsFile(const fs::path& path, uint32_t vertexCount, uint64_t fra
                         const std::function<std::span<const Vec3f>(uint64_t)>& frame) {
     CULLIDE_CHECK(vertexCount > 0 && frameCount > 0 && frameCount <= kMaxPositionsFrames,
                   "a positions file needs vertices and 1 to kMaxPositionsFrames frames");
-    const std::string source = pathText(path);
-    const OutputTarget target = outputTarget(path);
-    const fs::path tmp = target.inPlace() ? fs::path() : temporaryBeside(target.renameOnto);
-    std::FILE* out = target.inPlace() ? openInPlace(path) : std::fopen(tmp.c_str(), "wb");
-    if (!out) throw cannotWrite(path, errno);
-    struct Temporary {  // removed unless renamed into place
-        std::FILE*& file;
-        const fs::path& path;
-        bool done = false;
-        ~Temporary() {
-            if (file) std::fclose(file);
-            std::error_code ec;
-            if (!done && !path.empty()) fs::remove(path, ec);
-        }
-    } temporary{out, tmp};
-
+    OutputFile out(path);
     std::string head(kPositionsMagic, 8);
     appendLittleEndian(head, kPositionsVersion, 4);
     appendLittleEndian(head, vertexCount, 4);
     appendLittleEndian(head, frameCount, 8);
     appendLittleEndian(head, 0, 8);
-    bool wrote = std::fwrite(head.data(), 1, head.size(), out) == head.size();
+    out.write(head);
     std::vector<Vec3f> swapped;
-    for (uint64_t f = 0; f < frameCount && wrote; ++f) {
+    for (uint64_t f = 0; f < frameCount && !out.failed(); ++f) {
         std::span<const Vec3f> p = frame(f);
         CULLIDE_CHECK(p.size() == vertexCount, "a frame of a positions file has the wrong vertex count");
         if constexpr (std::endian::native == std::endian::big) {
@@ -203,17 +188,9 @@ void writePositionsFile(const fs::path& path, uint32_t vertexCount, uint64_t fra
             toFromLittleEndian(reinterpret_cast<char*>(swapped.data()), swapped.size() * 3);
             p = swapped;
         }
-        wrote = std::fwrite(p.data(), 12, p.size(), out) == p.size();
+        out.write({reinterpret_cast<const char*>(p.data()), p.size() * sizeof(Vec3f)});
     }
-    const int writeErrno = errno;
-    const bool closed = std::fclose(out) == 0;
-    out = nullptr;
-    if (!wrote || !closed) throw InputError(source, std::string("cannot write: ") + std::strerror(wrote ? errno : writeErrno));
-    if (target.inPlace()) return;
-    std::error_code ec;
-    fs::rename(tmp, target.renameOnto, ec);
-    if (ec) throw InputError(source, "cannot write: " + ec.message());
-    temporary.done = true;
+    out.commit();
 }
 
 }  // namespace cullide

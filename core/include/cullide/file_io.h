@@ -50,9 +50,29 @@ struct OutputTarget {
 };
 OutputTarget outputTarget(const std::filesystem::path& path);
 
-// The character device or FIFO at `path` (outputTarget's in-place case) opened for writing; a
-// FIFO with no reader is refused ("no process reads it"), not waited for. Throws InputError.
-std::FILE* openInPlace(const std::filesystem::path& path);
+// An output being written all or nothing at `path` (outputTarget): into a temporary beside it
+// that commit() renames into place and that goes, unnamed, if the object goes first; or in place
+// into a device or FIFO (one that no process reads is refused, not waited for). Throws
+// InputError(pathText(path), cause): a failed open, write or rename, said with its cause.
+class OutputFile {
+public:
+    explicit OutputFile(const std::filesystem::path& path);
+    ~OutputFile();
+    OutputFile(const OutputFile&) = delete;
+    OutputFile& operator=(const OutputFile&) = delete;
+
+    // Appends `bytes`; a failure is kept and said by commit(), and later writes are skipped.
+    void write(std::string_view bytes);
+    bool failed() const { return writeError_ != 0; }
+    // Closes the file and renames it into place.
+    void commit();
+
+private:
+    std::filesystem::path path_, temporary_;  // temporary_ empty: written in place
+    OutputTarget target_;
+    std::FILE* file_ = nullptr;
+    int writeError_ = 0;  // the errno of the first failed write
+};
 
 // A fresh name beside `path` for the temporary an all-or-nothing write renames into place:
 // "<path>.tmp.<pid>.<n>", unique per process and call.
